@@ -1,0 +1,91 @@
+#pragma once
+// Parameters of a scene, as plain structs with their defaults in one place. io/scene_toml.cpp maps
+// the TOML scene file one-to-one onto these; docs/scene.md documents every key with unit and
+// default. Units: lengths in the reference radius a, viscosity mu, energy kT (docs/units.md).
+#include "engine/state.hpp"
+#include "engine/types.hpp"
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace stokesian {
+
+struct FluidParams {
+  double viscosity = 1.0;  // mu, in units of the reference viscosity
+  double kT = 0.0;         // thermal energy in units of the reference kT; 0 = athermal
+};
+
+// One pair-force law. Only the fields of the chosen kind are used (docs/scene.md).
+struct PairForceParams {
+  enum class Kind { morse, dlvo, hertz } kind = Kind::morse;
+  double cutoff = 0.0;  // surface-gap cutoff h = r - a_i - a_j beyond which the force is zero [a]; 0 = law's default
+  // Morse (seed 1 eq. 2.17): phi = -V0 [2 exp(-kappa h) - exp(-2 kappa h)]
+  double morse_depth = 1.0;   // V0 [kT-units energy]
+  double morse_kappa = 5.0;   // kappa [1/a]
+  // DLVO (thesis s.2.2.2): Hamaker vdW + constant-potential double layer + Born repulsion.
+  double hamaker = 1.0;            // A [energy]
+  double debye_kappa = 10.0;       // inverse Debye length kappa [1/a]
+  double surface_potential = 1.0;  // psi_0 expressed through the prefactor 2 pi eps psi0^2 [energy/a]
+  double born_sigma = 0.01;        // Born collision diameter sigma [a]
+  double min_gap = 1e-4;           // gap floor h_min used to evaluate the singular vdW/Born terms [a]
+  // Hertz contact: F = k_H delta^{3/2} along the line of centres for overlap delta > 0.
+  double hertz_stiffness = 1000.0;  // k_H [energy / a^{5/2}]
+};
+
+struct ForceParams {
+  std::vector<Vec3> external_force;   // one entry for all particles, or one per particle [kT/a]
+  std::vector<Vec3> external_torque;  // idem [kT]
+  std::vector<PairForceParams> pair;
+};
+
+struct FlowParams {
+  enum class Kind { none, simple_shear, planar_extension } kind = Kind::none;
+  double rate = 0.0;  // shear or extension rate [1/time]
+};
+
+enum class HydroModel { auto_, free_draining, far_field, stokesian };
+enum class MomentChoice { auto_, F, FT, FTS };
+enum class FarFieldMethod { auto_, direct, ewald, pme, tree };
+
+struct HydroParams {
+  HydroModel model = HydroModel::auto_;
+  MomentChoice moments = MomentChoice::auto_;
+  FarFieldMethod far_field = FarFieldMethod::auto_;
+  double tolerance = 1e-6;  // relative accuracy of far-field products and iterative solves
+};
+
+enum class Integrator { euler, midpoint, rkf45 };
+
+struct TimeParams {
+  double dt = 1e-3;      // time step [time unit]
+  std::int64_t steps = 0;
+  Integrator integrator = Integrator::euler;
+  double rkf_tolerance = 1e-6;  // local error per step for rkf45 [a]
+};
+
+struct OutputParams {
+  std::int64_t every = 1;              // frames every N steps
+  std::int64_t checkpoint_every = 0;   // checkpoint every N steps; 0 = at the end only
+  bool velocity = true, angular_velocity = true, force = true, torque = true, stresslet = true;
+  std::string xyz;                     // optional extended-XYZ export path ("" = none)
+};
+
+struct Scene {
+  std::string source;  // path of the scene file (for messages)
+  Domain domain;
+  FluidParams fluid;
+  std::vector<Vec3> positions;
+  std::vector<double> radii;
+  std::vector<char> fixed;
+  ForceParams forces;
+  FlowParams flow;
+  HydroParams hydro;
+  std::uint64_t seed = 1;  // Brownian random seed
+  TimeParams time;
+  OutputParams output;
+  std::string toml;  // the scene as resolved TOML text (stored in outputs)
+};
+
+}  // namespace stokesian
