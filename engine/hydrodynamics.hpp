@@ -1,0 +1,54 @@
+#pragma once
+// The hydrodynamic solve: from forces, torques and the ambient flow to velocities, angular
+// velocities and stresslets, at the resolved level and moments.
+//
+// Mobility problem [Durlofsky, Brady & Bossis 1987, eq. 2.13]:
+//     [U - U_inf(x); Omega - Omega_inf; -E_inf] = M [F; T; S],
+// with F, T, S exerted by the particles on the fluid. Unknown are the stresslets S (FTS: rigid
+// particles do not deform with the strain) and the forces/torques of fixed particles (U = Omega
+// = 0; constrained mobility problem, seed 1 s.2.1.2). The unknowns z solve the principal
+// sub-system M_zz z = target_z - M_zk x_k, which is symmetric positive definite because M is
+// (engine/mobility_pair.hpp), by conjugate gradients to the scene's tolerance.
+// Free draining keeps only the self blocks (U = F/(6 pi mu a), ...).
+//
+// Brownian displacements (kT > 0, F and FT): dX_B = sqrt(2 kT dt) M^{1/2} W with W standard
+// normal; M^{1/2} W by Lanczos (engine/krylov.hpp). M_inf is divergence free (translational
+// blocks are built from the transverse projector), so no thermal drift term is needed here.
+#include "engine/flow.hpp"
+#include "engine/model.hpp"
+#include "engine/sym_traceless.hpp"
+
+#include <random>
+#include <vector>
+
+namespace stokesian {
+
+struct HydroResult {
+  std::vector<Vec3> U, Omega;  // velocities, angular velocities (Omega empty at F level)
+  std::vector<Vec5> S;         // stresslets exerted on the fluid (empty below FTS)
+  std::vector<Vec3> F, T;      // forces/torques exerted on the fluid (fixed particles: holding force)
+  int iterations = 0;          // Krylov iterations of the constrained solve
+};
+
+class Hydrodynamics {
+ public:
+  Hydrodynamics(const ResolvedModel& model, double viscosity, const AmbientFlow& flow, double tolerance);
+
+  // F, T: non-hydrodynamic force and torque on each particle (T ignored at F level).
+  HydroResult solve(const std::vector<Vec3>& x, const std::vector<double>& a, const std::vector<char>& fixed,
+                    const std::vector<Vec3>& F, const std::vector<Vec3>& T) const;
+
+  // Brownian displacements sqrt(2 kT dt) M^{1/2} W for the positions (rotations are not tracked).
+  std::vector<Vec3> brownian_displacement(const std::vector<Vec3>& x, const std::vector<double>& a, double kT,
+                                          double dt, std::mt19937_64& rng) const;
+
+  const ResolvedModel& model() const { return model_; }
+
+ private:
+  ResolvedModel model_;
+  double mu_;
+  AmbientFlow flow_;
+  double tol_;
+};
+
+}  // namespace stokesian

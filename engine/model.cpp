@@ -1,0 +1,142 @@
+#include "engine/model.hpp"
+
+#include "engine/errors.hpp"
+#include "engine/flow.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace stokesian {
+
+const char* to_string(HydroModel m) {
+  switch (m) {
+    case HydroModel::auto_: return "auto";
+    case HydroModel::free_draining: return "free_draining";
+    case HydroModel::far_field: return "far_field";
+    case HydroModel::stokesian: return "stokesian";
+  }
+  return "?";
+}
+
+const char* to_string(FarFieldMethod m) {
+  switch (m) {
+    case FarFieldMethod::auto_: return "auto";
+    case FarFieldMethod::direct: return "direct";
+    case FarFieldMethod::ewald: return "ewald";
+    case FarFieldMethod::pme: return "pme";
+    case FarFieldMethod::tree: return "tree";
+  }
+  return "?";
+}
+
+std::string ResolvedModel::describe() const {
+  std::ostringstream o;
+  o << "hydrodynamics: " << to_string(level) << "\nmoments: " << to_string(moments);
+  if (level != HydroModel::free_draining) o << "\nfar_field: " << to_string(far_field);
+  o << "\nbrownian: " << (brownian ? "yes" : "no");
+  for (const auto& r : reasons) o << "\n  - " << r;
+  return o.str();
+}
+
+namespace {
+
+// Smallest surface gap over all pairs (open or minimum image), O(N^2) but run once per scene.
+double min_gap(const Scene& s) {
+  double g = INFINITY;
+  for (std::size_t i = 0; i < s.positions.size(); ++i)
+    for (std::size_t j = i + 1; j < s.positions.size(); ++j)
+      g = std::min(g, s.domain.minimum_image(s.positions[i] - s.positions[j]).norm() - s.radii[i] - s.radii[j]);
+  return g;
+}
+
+[[noreturn]] void unavailable(const Scene& s, const std::string& key, const std::string& what) {
+  throw ConfigError(s.source + ": [hydrodynamics] " + key + ": " + what);
+}
+
+}  // namespace
+
+ResolvedModel resolve_model(const Scene& s) {
+  ResolvedModel m;
+  const std::size_t n = s.positions.size();
+  const AmbientFlow flow = ambient_flow(s.flow);
+  m.brownian = s.fluid.kT > 0.0;
+  m.fixed_particles = std::any_of(s.fixed.begin(), s.fixed.end(), [](char c) { return c != 0; });
+  m.reasons.push_back(m.brownian ? "fluid.kT > 0: Brownian motion on" : "fluid.kT = 0: athermal");
+
+  // Level.
+  if (s.hydro.model == HydroModel::auto_) {
+    if (n <= 1) {
+      m.level = HydroModel::free_draining;
+      m.reasons.push_back("auto level: a single particle has no hydrodynamic interactions -> free_draining");
+    } else {
+      m.level = HydroModel::far_field;
+      const double g = min_gap(s);
+      std::ostringstream r;
+      r << "auto level: " << n << " particles interact hydrodynamically -> far_field";
+      if (g < 0.5)
+        r << " (smallest initial gap " << g
+          << " a < 0.5 a: Stokesian dynamics would be more accurate, but near-field lubrication is not"
+             " in this version; set model = \"far_field\" to silence)";
+      m.reasons.push_back(r.str());
+    }
+  } else {
+    m.level = s.hydro.model;
+    m.reasons.push_back(std::string("level set by scene: ") + to_string(m.level));
+  }
+  if (m.level == HydroModel::stokesian)
+    unavailable(s, "model", "\"stokesian\" needs the near-field lubrication of a later version; available: "
+                            "\"free_draining\", \"far_field\", \"auto\"");
+
+  // Moments.
+  const bool torques = std::any_of(s.forces.external_torque.begin(), s.forces.external_torque.end(),
+                                   [](const Vec3& t) { return t.norm() > 0; });
+  if (s.hydro.moments == MomentChoice::auto_) {
+    if (flow.has_strain() && m.level != HydroModel::free_draining) {
+      m.moments = Moments::FTS;
+      m.reasons.push_back("auto moments: the ambient flow has a rate of strain -> FTS (rigid-particle stresslets)");
+    } else if (torques || (m.level != HydroModel::free_draining && flow.any())) {
+      m.moments = Moments::FT;
+      m.reasons.push_back("auto moments: torques or ambient vorticity present -> FT");
+    } else if (m.level == HydroModel::free_draining && flow.has_strain()) {
+      m.moments = Moments::FTS;
+      m.reasons.push_back("auto moments: free-draining stresslets of isolated spheres in the strain -> FTS");
+    } else {
+      m.moments = Moments::F;
+      m.reasons.push_back("auto moments: forces only, no torques or ambient flow -> F");
+    }
+  } else {
+    m.moments = s.hydro.moments == MomentChoice::F ? Moments::F
+              : s.hydro.moments == MomentChoice::FT ? Moments::FT : Moments::FTS;
+    m.reasons.push_back(std::string("moments set by scene: ") + to_string(m.moments));
+    if (torques && m.moments == Moments::F)
+      unavailable(s, "moments", "\"F\" ignores the scene's external torques; use \"FT\" or \"FTS\"");
+  }
+
+  // Far-field method.
+  if (m.level != HydroModel::free_draining) {
+    if (s.domain.periodic())
+      unavailable(s, "far_field", "periodic domains need the Ewald/PME far field of a later version; use "
+                                  "model = \"free_draining\" or an open domain");
+    if (s.hydro.far_field == FarFieldMethod::auto_ || s.hydro.far_field == FarFieldMethod::direct) {
+      m.far_field = FarFieldMethod::direct;
+      m.reasons.push_back(s.hydro.far_field == FarFieldMethod::auto_
+                              ? "auto far_field: open domain -> direct O(N^2) summation (the tree method is not in this version)"
+                              : "far_field set by scene: direct");
+    } else {
+      unavailable(s, "far_field", std::string("\"") + to_string(s.hydro.far_field) +
+                                      "\" is not in this version; available for open domains: \"direct\", \"auto\"");
+    }
+    if (m.brownian && m.moments == Moments::FTS)
+      unavailable(s, "moments", "Brownian motion with rigid-particle stresslets (FTS) needs the Stokesian-dynamics "
+                                "Brownian solver of a later version; use moments = \"FT\" or kT = 0");
+    if (m.brownian && m.fixed_particles)
+      unavailable(s, "model", "Brownian motion with fixed particles at the far-field level is not in this version");
+  }
+  if (m.brownian && s.time.integrator == Integrator::rkf45)
+    throw ConfigError(s.source + ": [time] integrator: \"rkf45\" is deterministic; with fluid.kT > 0 use "
+                                 "\"euler\" or \"midpoint\"");
+  return m;
+}
+
+}  // namespace stokesian
