@@ -1,0 +1,61 @@
+#include "engine/integrators.hpp"
+
+#include "engine/errors.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace stokesian {
+
+std::vector<Vec3> axpy(const std::vector<Vec3>& x, double h, const std::vector<Vec3>& u) {
+  std::vector<Vec3> y(x.size());
+  for (std::size_t i = 0; i < x.size(); ++i) y[i] = x[i] + h * u[i];
+  return y;
+}
+
+RkfStep rkf45_step(const VelocityField& U, const std::vector<Vec3>& x0, const std::vector<Vec3>& k1, double dt,
+                   double tol, double dt_min) {
+  // Fehlberg's coefficients (Butcher tableau of RKF45).
+  const std::size_t n = x0.size();
+  RkfStep out;
+  for (;;) {
+    auto stage = [&](std::initializer_list<std::pair<double, const std::vector<Vec3>*>> terms) {
+      std::vector<Vec3> y = x0;
+      for (const auto& [c, k] : terms)
+        for (std::size_t i = 0; i < n; ++i) y[i] += dt * c * (*k)[i];
+      return U(y);
+    };
+    const auto k2 = stage({{1.0 / 4, &k1}});
+    const auto k3 = stage({{3.0 / 32, &k1}, {9.0 / 32, &k2}});
+    const auto k4 = stage({{1932.0 / 2197, &k1}, {-7200.0 / 2197, &k2}, {7296.0 / 2197, &k3}});
+    const auto k5 = stage({{439.0 / 216, &k1}, {-8.0, &k2}, {3680.0 / 513, &k3}, {-845.0 / 4104, &k4}});
+    const auto k6 = stage({{-8.0 / 27, &k1}, {2.0, &k2}, {-3544.0 / 2565, &k3}, {1859.0 / 4104, &k4}, {-11.0 / 40, &k5}});
+    std::vector<Vec3> x4(n);
+    double err = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      x4[i] = x0[i] + dt * (25.0 / 216 * k1[i] + 1408.0 / 2565 * k3[i] + 2197.0 / 4104 * k4[i] - 0.2 * k5[i]);
+      const Vec3 x5 = x0[i] + dt * (16.0 / 135 * k1[i] + 6656.0 / 12825 * k3[i] + 28561.0 / 56430 * k4[i] -
+                                    9.0 / 50 * k5[i] + 2.0 / 55 * k6[i]);
+      err = std::max(err, (x5 - x4[i]).norm());
+    }
+    if (!std::isfinite(err)) throw PhysicsError("rkf45: non-finite error estimate (NaN positions or velocities)");
+    const double fac = err > 0 ? std::clamp(0.9 * std::pow(tol / err, 0.2), 0.2, 5.0) : 5.0;
+    if (err <= tol) {
+      out.x = std::move(x4);
+      out.dt_used = dt;
+      out.dt_next = dt * fac;
+      out.error = err;
+      return out;
+    }
+    ++out.rejected;
+    dt *= fac;
+    if (dt < dt_min) {
+      std::ostringstream o;
+      o << "rkf45: step size fell below " << dt_min << " (local error " << err << " > tolerance " << tol << ")";
+      throw PhysicsError(o.str());
+    }
+  }
+}
+
+}  // namespace stokesian

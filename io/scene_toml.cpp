@@ -1,0 +1,415 @@
+#include "io/scene_toml.hpp"
+
+#include "engine/errors.hpp"
+#include "engine/placement.hpp"
+#include "io/xyz.hpp"
+#include "io/h5md.hpp"
+
+#include <toml++/toml.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+
+namespace stokesian::io {
+namespace {
+
+class Reader {
+ public:
+  explicit Reader(std::string source) : source_(std::move(source)) {}
+
+  [[noreturn]] void fail(const toml::node* node, const std::string& where, const std::string& msg) const {
+    std::ostringstream o;
+    o << source_;
+    if (node && node->source().begin.line) o << ":" << node->source().begin.line;
+    o << ": " << where << ": " << msg;
+    throw ConfigError(o.str());
+  }
+
+  // Rejects keys of `t` not in `allowed`.
+  void only(const toml::table& t, const std::string& table, const std::set<std::string>& allowed) const {
+    for (auto&& [k, v] : t) {
+      if (!allowed.count(std::string(k.str()))) {
+        std::string list;
+        for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
+        fail(&v, "[" + table + "] " + std::string(k.str()), "unknown key (allowed: " + list + ")");
+      }
+    }
+  }
+
+  double number(const toml::table& t, const std::string& table, const std::string& key, double def, double lo,
+                double hi, bool lo_open = false) const {
+    const toml::node* n = t.get(key);
+    if (!n) return def;
+    double v;
+    if (auto i = n->value_exact<int64_t>()) v = double(*i);
+    else if (auto d = n->value_exact<double>()) v = *d;
+    else fail(n, where(table, key), "expected a number, got " + type_name(*n));
+    if (!(v >= lo && v <= hi) || (lo_open && v == lo)) {
+      std::ostringstream o;
+      o << "value " << v << " out of range (allowed " << (lo_open ? "(" : "[") << lo << ", " << hi << "])";
+      fail(n, where(table, key), o.str());
+    }
+    return v;
+  }
+
+  long integer(const toml::table& t, const std::string& table, const std::string& key, long def, long lo, long hi) const {
+    const toml::node* n = t.get(key);
+    if (!n) return def;
+    auto i = n->value_exact<int64_t>();
+    if (!i) fail(n, where(table, key), "expected an integer, got " + type_name(*n));
+    if (*i < lo || *i > hi) {
+      std::ostringstream o;
+      o << "value " << *i << " out of range (allowed [" << lo << ", " << hi << "])";
+      fail(n, where(table, key), o.str());
+    }
+    return long(*i);
+  }
+
+  std::string choice(const toml::table& t, const std::string& table, const std::string& key, const std::string& def,
+                     const std::vector<std::string>& allowed) const {
+    const toml::node* n = t.get(key);
+    if (!n) return def;
+    auto s = n->value_exact<std::string>();
+    if (!s) fail(n, where(table, key), "expected a string, got " + type_name(*n));
+    if (std::find(allowed.begin(), allowed.end(), *s) == allowed.end()) {
+      std::string list;
+      for (const auto& a : allowed) list += (list.empty() ? "\"" : ", \"") + a + "\"";
+      fail(n, where(table, key), "\"" + *s + "\" is not one of " + list);
+    }
+    return *s;
+  }
+
+  std::string string(const toml::table& t, const std::string& table, const std::string& key, const std::string& def) const {
+    const toml::node* n = t.get(key);
+    if (!n) return def;
+    auto s = n->value_exact<std::string>();
+    if (!s) fail(n, where(table, key), "expected a string, got " + type_name(*n));
+    return *s;
+  }
+
+  bool boolean(const toml::table& t, const std::string& table, const std::string& key, bool def) const {
+    const toml::node* n = t.get(key);
+    if (!n) return def;
+    auto b = n->value_exact<bool>();
+    if (!b) fail(n, where(table, key), "expected true or false, got " + type_name(*n));
+    return *b;
+  }
+
+  Vec3 vec3(const toml::node& n, const std::string& w) const {
+    const toml::array* a = n.as_array();
+    if (!a || a->size() != 3) fail(&n, w, "expected an array of 3 numbers");
+    Vec3 v;
+    for (int c = 0; c < 3; ++c) {
+      const toml::node& e = *a->get(std::size_t(c));
+      if (auto i = e.value_exact<int64_t>()) v[c] = double(*i);
+      else if (auto d = e.value_exact<double>()) v[c] = *d;
+      else fail(&e, w, "expected a number, got " + type_name(e));
+      if (!std::isfinite(v[c])) fail(&e, w, "not a finite number");
+    }
+    return v;
+  }
+
+  // One vector for all particles ([x, y, z]) or one per particle ([[x, y, z], ...]).
+  std::vector<Vec3> vec3_list(const toml::table& t, const std::string& table, const std::string& key) const {
+    const toml::node* n = t.get(key);
+    if (!n) return {};
+    const toml::array* a = n->as_array();
+    if (!a || a->empty()) fail(n, where(table, key), "expected [x, y, z] or a list of [x, y, z]");
+    if (!a->get(0)->is_array()) return {vec3(*n, where(table, key))};
+    std::vector<Vec3> out;
+    for (const auto& e : *a) out.push_back(vec3(e, where(table, key)));
+    return out;
+  }
+
+  static std::string where(const std::string& table, const std::string& key) { return "[" + table + "] " + key; }
+  static std::string type_name(const toml::node& n) {
+    switch (n.type()) {
+      case toml::node_type::string: return "a string";
+      case toml::node_type::integer: return "an integer";
+      case toml::node_type::floating_point: return "a float";
+      case toml::node_type::boolean: return "a boolean";
+      case toml::node_type::array: return "an array";
+      case toml::node_type::table: return "a table";
+      default: return "a date/time";
+    }
+  }
+  const std::string& source() const { return source_; }
+
+ private:
+  std::string source_;
+};
+
+const toml::table& sub(const Reader& r, const toml::table& root, const std::string& name) {
+  static const toml::table empty;
+  const toml::node* n = root.get(name);
+  if (!n) return empty;
+  if (!n->is_table()) r.fail(n, "[" + name + "]", "expected a table");
+  return *n->as_table();
+}
+
+void read_particles(const Reader& R, const toml::table& t, Scene& s, const std::string& base_dir) {
+  const std::string T = "particles";
+  R.only(t, T, {"positions", "radii", "radius", "file", "generate", "count", "volume_fraction", "size_distribution",
+                "radius_ratio", "large_fraction", "sigma", "seed", "fixed"});
+  const bool has_pos = t.contains("positions"), has_file = t.contains("file"), has_gen = t.contains("generate");
+  if (int(has_pos) + int(has_file) + int(has_gen) != 1)
+    R.fail(&t, "[particles]", "give exactly one of positions, file, generate");
+  if (has_pos) {
+    const toml::array* a = t.get("positions")->as_array();
+    if (!a || a->empty()) R.fail(t.get("positions"), "[particles] positions", "expected a non-empty list of [x, y, z]");
+    for (const auto& e : *a) s.positions.push_back(R.vec3(e, "[particles] positions"));
+    if (t.contains("radii")) {
+      const toml::array* r = t.get("radii")->as_array();
+      if (!r) R.fail(t.get("radii"), "[particles] radii", "expected a list of numbers");
+      if (r->size() != s.positions.size()) {
+        std::ostringstream o;
+        o << "has " << r->size() << " entries for " << s.positions.size() << " positions";
+        R.fail(t.get("radii"), "[particles] radii", o.str());
+      }
+      for (const auto& e : *r) {
+        auto v = e.value<double>();
+        if (!v || !(*v > 0)) R.fail(&e, "[particles] radii", "every radius must be a number > 0");
+        s.radii.push_back(*v);
+      }
+      if (t.contains("radius")) R.fail(t.get("radius"), "[particles] radius", "give radius or radii, not both");
+    } else {
+      s.radii.assign(s.positions.size(), R.number(t, T, "radius", 1.0, 0.0, 1e6, true));
+    }
+  } else if (has_file) {
+    std::string path = R.string(t, T, "file", "");
+    if (!path.empty() && path[0] != '/') path = base_dir + "/" + path;
+    try {
+      if (path.size() > 3 && (path.substr(path.size() - 3) == ".h5" || path.substr(path.size() - 5) == ".hdf5")) {
+        const auto f = read_last_frame(path);
+        s.positions = f.position;
+        s.radii = f.radius;
+      } else {
+        const auto frames = read_xyz(path);
+        if (frames.empty()) throw std::runtime_error(path + ": no frames");
+        s.positions = frames.back().position;
+        s.radii = frames.back().radius;
+        if (s.radii.empty()) s.radii.assign(s.positions.size(), R.number(t, T, "radius", 1.0, 0.0, 1e6, true));
+      }
+    } catch (const std::exception& e) {
+      R.fail(t.get("file"), "[particles] file", e.what());
+    }
+  } else {
+    PlacementParams p;
+    p.pattern = R.choice(t, T, "generate", "random", {"random", "lattice"}) == "lattice"
+                    ? PlacementParams::Pattern::lattice : PlacementParams::Pattern::random;
+    if (!t.contains("count")) R.fail(&t, "[particles] count", "required with generate");
+    p.count = R.integer(t, T, "count", 0, 1, 10000000);
+    p.volume_fraction = R.number(t, T, "volume_fraction", 0.1, 0.0, 0.74, true);
+    p.radius = R.number(t, T, "radius", 1.0, 0.0, 1e6, true);
+    const std::string sd = R.choice(t, T, "size_distribution", "monodisperse", {"monodisperse", "bidisperse", "lognormal"});
+    p.sizes = sd == "bidisperse" ? PlacementParams::Sizes::bidisperse
+            : sd == "lognormal" ? PlacementParams::Sizes::lognormal : PlacementParams::Sizes::monodisperse;
+    p.radius_ratio = R.number(t, T, "radius_ratio", 2.0, 0.0, 1e3, true);
+    p.large_fraction = R.number(t, T, "large_fraction", 0.5, 0.0, 1.0);
+    p.sigma = R.number(t, T, "sigma", 0.2, 0.0, 2.0);
+    p.seed = std::uint64_t(R.integer(t, T, "seed", 1, 0, std::numeric_limits<long>::max()));
+    try {
+      const Placement pl = place_particles(p, s.domain.periodic() ? s.domain.box : Vec3::Zero());
+      s.positions = pl.position;
+      s.radii = pl.radius;
+    } catch (const std::invalid_argument& e) {
+      R.fail(t.get("generate"), "[particles] generate", e.what());
+    }
+  }
+  s.fixed.assign(s.positions.size(), 0);
+  if (const toml::node* n = t.get("fixed")) {
+    const toml::array* a = n->as_array();
+    if (!a || a->size() != s.positions.size())
+      R.fail(n, "[particles] fixed", "expected one true/false per particle");
+    for (std::size_t i = 0; i < a->size(); ++i) {
+      auto b = a->get(i)->value_exact<bool>();
+      if (!b) R.fail(a->get(i), "[particles] fixed", "expected true or false");
+      s.fixed[i] = *b ? 1 : 0;
+    }
+  }
+}
+
+PairForceParams read_pair(const Reader& R, const toml::table& t, std::size_t index) {
+  const std::string T = "forces.pair." + std::to_string(index);
+  PairForceParams p;
+  const std::string kind = R.choice(t, T, "kind", "", {"morse", "dlvo", "hertz"});
+  if (kind.empty()) R.fail(&t, "[[forces.pair]] kind", "required (\"morse\", \"dlvo\" or \"hertz\")");
+  p.cutoff = R.number(t, T, "cutoff", 0.0, 0.0, 1e6);
+  if (kind == "morse") {
+    p.kind = PairForceParams::Kind::morse;
+    R.only(t, T, {"kind", "cutoff", "depth", "kappa"});
+    p.morse_depth = R.number(t, T, "depth", p.morse_depth, 0.0, 1e12);
+    p.morse_kappa = R.number(t, T, "kappa", p.morse_kappa, 0.0, 1e6, true);
+  } else if (kind == "dlvo") {
+    p.kind = PairForceParams::Kind::dlvo;
+    R.only(t, T, {"kind", "cutoff", "hamaker", "debye_kappa", "surface_potential", "surface_potential_reduced",
+                  "born_sigma", "min_gap", "double_layer"});
+    p.hamaker = R.number(t, T, "hamaker", p.hamaker, 0.0, 1e12);
+    p.debye_kappa = R.number(t, T, "debye_kappa", p.debye_kappa, 0.0, 1e6, true);
+    p.surface_potential = R.number(t, T, "surface_potential", p.surface_potential, 0.0, 1e12);
+    p.surface_potential_reduced = R.number(t, T, "surface_potential_reduced", p.surface_potential_reduced, 0.0, 1e3);
+    p.born_sigma = R.number(t, T, "born_sigma", p.born_sigma, 0.0, 1.0);
+    p.min_gap = R.number(t, T, "min_gap", p.min_gap, 0.0, 1.0, true);
+    p.double_layer = R.choice(t, T, "double_layer", "hhf", {"hhf", "lsa"}) == "lsa"
+                         ? PairForceParams::DoubleLayer::lsa : PairForceParams::DoubleLayer::hhf;
+  } else {
+    p.kind = PairForceParams::Kind::hertz;
+    R.only(t, T, {"kind", "cutoff", "stiffness"});
+    p.hertz_stiffness = R.number(t, T, "stiffness", p.hertz_stiffness, 0.0, 1e15, true);
+  }
+  return p;
+}
+
+std::string dir_of(const std::string& path) {
+  const auto p = std::filesystem::path(path).parent_path();
+  return p.empty() ? "." : p.string();
+}
+
+}  // namespace
+
+Scene parse_scene(const std::string& text, const std::string& source) { 
+  Reader R(source);
+  toml::table root;
+  try {
+    root = toml::parse(text, source);
+  } catch (const toml::parse_error& e) {
+    std::ostringstream o;
+    o << source << ":" << e.source().begin.line << ": TOML syntax error: " << e.description();
+    throw ConfigError(o.str());
+  }
+  R.only(root, "top level", {"domain", "fluid", "particles", "forces", "flow", "hydrodynamics", "brownian", "time", "output"});
+  Scene s;
+  s.source = source;
+
+  const toml::table& dom = sub(R, root, "domain");
+  R.only(dom, "domain", {"kind", "box", "shear_strain"});
+  s.domain.kind = R.choice(dom, "domain", "kind", "open", {"open", "periodic"}) == "periodic" ? Domain::Kind::periodic
+                                                                                            : Domain::Kind::open;
+  if (const toml::node* b = dom.get("box")) {
+    s.domain.box = R.vec3(*b, "[domain] box");
+    if (s.domain.box.minCoeff() <= 0) R.fail(b, "[domain] box", "every edge must be > 0");
+    if (!s.domain.periodic()) R.fail(b, "[domain] box", "only meaningful with kind = \"periodic\"");
+  } else if (s.domain.periodic()) {
+    R.fail(&dom, "[domain] box", "required with kind = \"periodic\"");
+  }
+  s.domain.shear_strain = R.number(dom, "domain", "shear_strain", 0.0, -1e9, 1e9);
+  if (s.domain.shear_strain != 0 && !s.domain.periodic())
+    R.fail(dom.get("shear_strain"), "[domain] shear_strain", "only meaningful with kind = \"periodic\"");
+
+  const toml::table& fl = sub(R, root, "fluid");
+  R.only(fl, "fluid", {"viscosity", "kT"});
+  s.fluid.viscosity = R.number(fl, "fluid", "viscosity", 1.0, 0.0, 1e12, true);
+  s.fluid.kT = R.number(fl, "fluid", "kT", 0.0, 0.0, 1e12);
+
+  if (!root.contains("particles")) R.fail(&root, "[particles]", "required table is missing");
+  read_particles(R, sub(R, root, "particles"), s, dir_of(source));
+
+  const toml::table& fo = sub(R, root, "forces");
+  R.only(fo, "forces", {"external_force", "external_torque", "pair"});
+  s.forces.external_force = R.vec3_list(fo, "forces", "external_force");
+  s.forces.external_torque = R.vec3_list(fo, "forces", "external_torque");
+  for (const auto* key : {"external_force", "external_torque"}) {
+    const auto& v = std::string(key) == "external_force" ? s.forces.external_force : s.forces.external_torque;
+    if (v.size() > 1 && v.size() != s.positions.size()) {
+      std::ostringstream o;
+      o << "has " << v.size() << " vectors for " << s.positions.size() << " particles (give 1 or one per particle)";
+      R.fail(fo.get(key), std::string("[forces] ") + key, o.str());
+    }
+  }
+  if (const toml::node* pn = fo.get("pair")) {
+    const toml::array* arr = pn->as_array();
+    if (!arr) R.fail(pn, "[[forces.pair]]", "expected an array of tables ([[forces.pair]])");
+    for (std::size_t i = 0; i < arr->size(); ++i) {
+      const toml::table* pt = arr->get(i)->as_table();
+      if (!pt) R.fail(arr->get(i), "[[forces.pair]]", "expected a table");
+      s.forces.pair.push_back(read_pair(R, *pt, i));
+    }
+  }
+
+  const toml::table& flow = sub(R, root, "flow");
+  R.only(flow, "flow", {"kind", "rate"});
+  const std::string fk = R.choice(flow, "flow", "kind", "none", {"none", "simple_shear", "planar_extension"});
+  s.flow.kind = fk == "simple_shear" ? FlowParams::Kind::simple_shear
+              : fk == "planar_extension" ? FlowParams::Kind::planar_extension : FlowParams::Kind::none;
+  s.flow.rate = R.number(flow, "flow", "rate", 0.0, -1e12, 1e12);
+  if (s.flow.kind != FlowParams::Kind::none && !flow.contains("rate"))
+    R.fail(&flow, "[flow] rate", "required when kind is not \"none\"");
+
+  const toml::table& hy = sub(R, root, "hydrodynamics");
+  R.only(hy, "hydrodynamics", {"model", "moments", "far_field", "tolerance"});
+  const std::string model = R.choice(hy, "hydrodynamics", "model", "auto", {"auto", "free_draining", "far_field", "stokesian"});
+  s.hydro.model = model == "free_draining" ? HydroModel::free_draining
+                : model == "far_field" ? HydroModel::far_field
+                : model == "stokesian" ? HydroModel::stokesian : HydroModel::auto_;
+  const std::string mo = R.choice(hy, "hydrodynamics", "moments", "auto", {"auto", "F", "FT", "FTS"});
+  s.hydro.moments = mo == "F" ? MomentChoice::F : mo == "FT" ? MomentChoice::FT : mo == "FTS" ? MomentChoice::FTS : MomentChoice::auto_;
+  const std::string ff = R.choice(hy, "hydrodynamics", "far_field", "auto", {"auto", "direct", "ewald", "pme", "tree"});
+  s.hydro.far_field = ff == "direct" ? FarFieldMethod::direct : ff == "ewald" ? FarFieldMethod::ewald
+                    : ff == "pme" ? FarFieldMethod::pme : ff == "tree" ? FarFieldMethod::tree : FarFieldMethod::auto_;
+  s.hydro.tolerance = R.number(hy, "hydrodynamics", "tolerance", 1e-6, 1e-14, 0.1);
+
+  const toml::table& br = sub(R, root, "brownian");
+  R.only(br, "brownian", {"seed"});
+  s.seed = std::uint64_t(R.integer(br, "brownian", "seed", 1, 0, std::numeric_limits<long>::max()));
+
+  const toml::table& ti = sub(R, root, "time");
+  R.only(ti, "time", {"dt", "steps", "integrator", "rkf_tolerance"});
+  s.time.dt = R.number(ti, "time", "dt", 1e-3, 0.0, 1e12, true);
+  s.time.steps = R.integer(ti, "time", "steps", 0, 0, std::numeric_limits<long>::max());
+  const std::string integ = R.choice(ti, "time", "integrator", "euler", {"euler", "midpoint", "rkf45"});
+  s.time.integrator = integ == "midpoint" ? Integrator::midpoint : integ == "rkf45" ? Integrator::rkf45 : Integrator::euler;
+  s.time.rkf_tolerance = R.number(ti, "time", "rkf_tolerance", 1e-6, 1e-14, 1.0);
+
+  const toml::table& out = sub(R, root, "output");
+  R.only(out, "output", {"every", "checkpoint_every", "record", "xyz"});
+  s.output.every = R.integer(out, "output", "every", 1, 1, std::numeric_limits<long>::max());
+  s.output.checkpoint_every = R.integer(out, "output", "checkpoint_every", 0, 0, std::numeric_limits<long>::max());
+  if (s.output.checkpoint_every > 0 && s.output.checkpoint_every % s.output.every != 0)
+    R.fail(out.get("checkpoint_every"), "[output] checkpoint_every",
+           "must be a multiple of [output] every (" + std::to_string(s.output.every) + ")");
+  s.output.xyz = R.string(out, "output", "xyz", "");
+  if (const toml::node* rn = out.get("record")) {
+    const toml::array* a = rn->as_array();
+    if (!a) R.fail(rn, "[output] record", "expected a list of names");
+    s.output.velocity = s.output.angular_velocity = s.output.force = s.output.torque = s.output.stresslet = false;
+    for (const auto& e : *a) {
+      auto v = e.value_exact<std::string>();
+      const std::string name = v ? *v : "";
+      if (name == "velocity") s.output.velocity = true;
+      else if (name == "angular_velocity") s.output.angular_velocity = true;
+      else if (name == "force") s.output.force = true;
+      else if (name == "torque") s.output.torque = true;
+      else if (name == "stresslet") s.output.stresslet = true;
+      else R.fail(&e, "[output] record", "\"" + name + "\" is not one of \"velocity\", \"angular_velocity\", \"force\", \"torque\", \"stresslet\"");
+    }
+  }
+
+  // Consistency checks across tables.
+  for (std::size_t i = 0; i < s.positions.size(); ++i)
+    if (s.domain.periodic()) {
+      for (int c = 0; c < 3; ++c)
+        if (2 * s.radii[i] >= s.domain.box[c]) {
+          std::ostringstream o;
+          o << "particle " << i << " of radius " << s.radii[i] << " does not fit in the box";
+          R.fail(dom.get("box"), "[domain] box", o.str());
+        }
+    }
+  std::ostringstream resolved;
+  resolved << root;
+  s.toml = resolved.str();
+  return s;
+}
+
+Scene load_scene(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw ConfigError(path + ": cannot open scene file");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return parse_scene(ss.str(), path);
+}
+
+}  // namespace stokesian::io
