@@ -139,6 +139,30 @@ PairScalars pair_scalars(double a, double b, double r, double mu, Moments m) {
   return s;
 }
 
+PairScalars scalars_from_derivatives(const PsiDerivatives& ff, const PsiDerivatives& tf, const PsiDerivatives& ft,
+                                     const PsiDerivatives& tt, double r, double mu, Moments m) {
+  const double k = 1.0 / (8.0 * kPi * mu), r2 = r * r, r3 = r2 * r;
+  PairScalars s;
+  s.xa = k * 2.0 * ff.d1 / r;
+  s.ya = k * (ff.d2 + ff.d1 / r);
+  if (m == Moments::F) return s;
+  auto yb = [&](const PsiDerivatives& d) { return -0.5 * d.d3 - d.d2 / r + d.d1 / r2; };
+  s.yb = k * yb(tf);
+  s.ybt = k * yb(ft);
+  s.xc = k * yb(tt) / r;
+  s.yc = k * (-0.25 * tt.d4 - 0.75 * tt.d3 / r + 0.5 * tt.d2 / r2 - 0.5 * tt.d1 / r3);
+  if (m == Moments::FT) return s;
+  s.xg = k * 3.0 * (r * tf.d2 - tf.d1) / r2;
+  s.yg = k * 0.5 * tf.d3;
+  s.xgt = -k * 3.0 * (r * ft.d2 - ft.d1) / r2;
+  s.ygt = -k * 0.5 * ft.d3;
+  s.yh = s.yht = k * (-r3 * tt.d4 - r2 * tt.d3 + 6.0 * r * tt.d2 - 6.0 * tt.d1) / (4.0 * r3);
+  s.xm = k * 3.0 * (-r2 * tt.d3 + 2.0 * r * tt.d2 - 2.0 * tt.d1) / r3;
+  s.ym = k * (-0.5 * tt.d4 + 0.5 * tt.d3 / r - 3.0 * tt.d2 / r2 + 3.0 * tt.d1 / r3);
+  s.zm = k * (-tt.d3 / r);
+  return s;
+}
+
 PairScalars self_scalars(double a, double mu) {
   PairScalars s;
   s.xa = s.ya = 1.0 / (6.0 * kPi * mu * a);

@@ -51,6 +51,16 @@ PairRegime pair_regime(double a_alpha, double a_beta, double r);
 // radius a_beta) at centre distance r >= 0. Only the scalars needed for `m` are computed.
 PairScalars pair_scalars(double a_alpha, double a_beta, double r, double mu, Moments m);
 
+// Radial derivatives d1..d4 of 8 pi mu Psi(r) for one pair of kinds, at distance r > 0.
+struct PsiDerivatives {
+  double d1 = 0, d2 = 0, d3 = 0, d4 = 0;
+};
+// Scalars from the radial derivatives of any generating function Psi (e.g. the real-space part
+// of an Ewald split), given for the kind pairs FF, TF (torque/stresslet kind at alpha), FT and TT.
+// The formulas are those of tools/derive_scalars.py; the result includes 1/(8 pi mu).
+PairScalars scalars_from_derivatives(const PsiDerivatives& ff, const PsiDerivatives& tf, const PsiDerivatives& ft,
+                                     const PsiDerivatives& tt, double r, double mu, Moments m);
+
 // Single-sphere (self) mobilities: 1/(6 pi mu a), 1/(8 pi mu a^3), 3/(20 pi mu a^3).
 PairScalars self_scalars(double a, double mu);
 
