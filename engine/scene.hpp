@@ -17,21 +17,33 @@ struct FluidParams {
   double kT = 0.0;         // thermal energy in units of the reference kT; 0 = athermal
 };
 
-// One pair-force law. Only the fields of the chosen kind are used (docs/scene.md).
+// One pair-force law. Only the fields of the chosen kind are used (docs/scene.md). The laws and
+// their regularisation are stated in engine/pair_forces.hpp.
 struct PairForceParams {
   enum class Kind { morse, dlvo, hertz } kind = Kind::morse;
   double cutoff = 0.0;  // surface-gap cutoff h = r - a_i - a_j beyond which the force is zero [a]; 0 = law's default
+                        // (energy shifted to vanish there; default from forces::default_cutoff)
   // Morse (seed 1 eq. 2.17): phi = -V0 [2 exp(-kappa h) - exp(-2 kappa h)]
   double morse_depth = 1.0;   // V0 [kT-units energy]
   double morse_kappa = 5.0;   // kappa [1/a]
   // DLVO (thesis s.2.2.2): Hamaker vdW + constant-potential double layer + Born repulsion.
-  double hamaker = 1.0;            // A [energy]
+  // Alumina in water (thesis s.5.3.2: A = 4.76e-20 J, eps_r = 81, T = 298 K, 7 mM, |psi0| = 37 mV,
+  // sigma = 7 A) for spheres of physical radius a_phys, with kT = 4.1143e-21 J:
+  //   hamaker = A/kT = 11.569;  debye_kappa = a_phys / 3.6925 nm (kappa^2 = 2 N_A e^2 I/(eps kT));
+  //   surface_potential = 2 pi eps_r eps_0 psi0^2 a_phys / kT = 1.4994e9 m^-1 * a_phys;
+  //   surface_potential_reduced = e psi0/kT = 1.4408;  born_sigma = 0.7 nm / a_phys.
+  //   a_phys = 369.25 nm gives debye_kappa = 100, surface_potential = 553.65, born_sigma = 1.8958e-3.
+  double hamaker = 1.0;            // A [kT]
   double debye_kappa = 10.0;       // inverse Debye length kappa [1/a]
-  double surface_potential = 1.0;  // psi_0 expressed through the prefactor 2 pi eps psi0^2 [energy/a]
-  double born_sigma = 0.01;        // Born collision diameter sigma [a]
-  double min_gap = 1e-4;           // gap floor h_min used to evaluate the singular vdW/Born terms [a]
-  // Hertz contact: F = k_H delta^{3/2} along the line of centres for overlap delta > 0.
-  double hertz_stiffness = 1000.0;  // k_H [energy / a^{5/2}]
+  double surface_potential = 1.0;  // psi_0 expressed through the prefactor 2 pi eps psi0^2 [kT/a]; same psi0 on all particles
+  double born_sigma = 0.01;        // Born collision parameter sigma, O(5 A) (Feke et al. 1984) [a]; 0 = no Born term
+  double min_gap = 1e-4;           // gap floor h_min: below it the DLVO energy continues linearly (constant force) [a]
+  enum class DoubleLayer { hhf, lsa };
+  DoubleLayer double_layer = DoubleLayer::hhf;  // hhf = Hogg-Healy-Fuerstenau; lsa = linear superposition (Bell et al. 1970), kappa a > 10
+  double surface_potential_reduced = 0.0;       // e psi0/kT, only for the lsa tanh(e psi0/4kT) saturation; 0 = linearised [1]
+  // Hertz contact: U = (2/5) k_H delta^{5/2}, F = k_H delta^{3/2} along the line of centres for
+  // overlap delta = a_i + a_j - r > 0 (thesis eq. 2.7 writes k' delta^{2.5}: k' = (2/5) k_H).
+  double hertz_stiffness = 1000.0;  // k_H [kT / a^{5/2}]
 };
 
 struct ForceParams {

@@ -1,0 +1,112 @@
+#pragma once
+// Conservative central pair forces between spheres i, j (radii a_i, a_j; units a, kT).
+//
+// Every law is a pair energy U(r; a_i, a_j) of the centre distance r = |r_ij|, r_ij = x_i - x_j
+// (minimum image), with surface gap h = r - a_i - a_j. The force on i is
+//   F_i = -dU/dr r_ij / r,   F_j = -F_i                                   (seed 1 eq. 2.18)
+// (thesis eq. 2.6 writes the same sum with n_ab pointing from a to b, i.e. with the opposite sign;
+// method.md s.8). The pair virial sum is W = sum_pairs r_ij (x) F_i.
+//
+// Laws (a_eff = a_i a_j / (a_i + a_j)):
+//  Morse (seed 1 eq. 2.17): U = -V0 [2 e^{-kappa h} - e^{-2 kappa h}], for all h; minimum -V0 at
+//    h = 0 and the same expression repels overlapping spheres (seed 1 after eq. 2.18).
+//  DLVO (thesis s.2.2.2; s.5.2.2 refers back to it): U = U_vdW + U_dl + U_Born with
+//    U_vdW = -(A/6) [2 a_i a_j/(r^2 - (a_i+a_j)^2) + 2 a_i a_j/(r^2 - (a_i-a_j)^2)
+//                    + ln((r^2 - (a_i+a_j)^2)/(r^2 - (a_i-a_j)^2))]        (Hamaker 1937)
+//      dU_vdW/dr = 32 A a_i^3 a_j^3 r / (3 P^2 M^2), P = r^2 - (a_i+a_j)^2, M = r^2 - (a_i-a_j)^2,
+//      and with t = 4 a_i a_j / M the bracket equals sum_{k>=3} (k-2)/(2k) t^k, summed for small t
+//      where the closed form cancels. Limits: -A a_eff/(6h) as h -> 0, -16 A a_i^3 a_j^3/(9 r^6).
+//    U_dl (Hogg, Healy & Fuerstenau 1966, constant potential, Debye-Hueckel) with equal surface
+//      potentials psi_0 on both spheres; the thesis' bracket then reduces to 2 ln(1 + e^{-kappa h}):
+//      U_dl = pi eps a_eff 2 psi0^2 * 2 ln(1 + e^{-kappa h}) = 2 Z a_eff ln(1 + e^{-kappa h}),
+//      Z = 2 pi eps psi0^2 (PairForceParams::surface_potential, kT/a).
+//    or, for kappa a > 10, the linear superposition form (Bell, Levine & McCartney 1970):
+//      U_dl = 64 pi eps (kT/e)^2 tanh^2(e psi0/4kT) (a_i a_j / r) e^{-kappa h}
+//           = 2 Z g (a_i a_j / r) e^{-kappa h},  g = [tanh(psi~/4)/(psi~/4)]^2, psi~ = e psi0/kT.
+//    U_Born (Feke et al. 1984 as quoted in thesis s.2.2.2, n = 12), R = r/a_i, lambda = a_j/a_i,
+//      s = sigma/a_i:  U_Born = A s^6/37800 * (1/R) * sum_{k=1..4} N_k(R)/D_k^7 with
+//        D1 = R-1+lambda, N1 = -R^2 - 7(lambda-1)R - 6(lambda^2-7lambda+1)
+//        D2 = R+1-lambda, N2 = -R^2 + 7(lambda-1)R - 6(lambda^2-7lambda+1)
+//        D3 = R+1+lambda, N3 =  R^2 + 7(lambda+1)R + 6(lambda^2+7lambda+1)
+//        D4 = R-1-lambda, N4 =  R^2 - 7(lambda+1)R + 6(lambda^2+7lambda+1)
+//      (4 (n-8)!/(n-2)! = 1/37800); small-gap limit A sigma^6 a_eff / (1260 h^7).
+//    Gap floor: for h < h_min (PairForceParams::min_gap) the DLVO sum is continued linearly,
+//      U(h) = U(h_min) + U'(h_min)(h - h_min): the force stays finite and continuous (constant
+//      below h_min) and remains the exact derivative of the energy. Overlap needs a Hertz law as
+//      well (thesis eq. 2.7 pairs DLVO with Hertz contact in the same way).
+//  Hertz: U = (2/5) k_H delta^{5/2}, dU/dr = -k_H delta^{3/2}, delta = a_i + a_j - r > 0, else 0.
+//
+// Cut-off (cut and shift): U_c(r) = U(r) - U(a_i + a_j + h_c) for h < h_c, 0 beyond; the force is
+// the exact derivative of U_c below h_c and jumps by the (small) force at h_c. Default h_c keeps
+// each term below kDefaultCutoffTolerance of its energy scale (default_cutoff).
+#include "engine/scene.hpp"
+#include "engine/state.hpp"
+#include "engine/types.hpp"
+
+#include <vector>
+
+namespace stokesian::forces {
+
+// Energy U [kT] and its derivative dU/dr [kT/a] at one centre distance.
+struct EnergyDerivative {
+  double U = 0.0;
+  double dUdr = 0.0;
+};
+
+// ---- Components, unregularised: valid for h = r - a_i - a_j > 0 ----
+EnergyDerivative vdw_hamaker(double r, double ai, double aj, double hamaker);
+EnergyDerivative born_feke(double r, double ai, double aj, double hamaker, double sigma);
+EnergyDerivative double_layer_hhf(double r, double ai, double aj, double Z, double kappa);
+EnergyDerivative double_layer_lsa(double r, double ai, double aj, double Z, double kappa, double psi_reduced);
+
+// ---- Evaluators: the formula only, (r, a_i, a_j) -> (U, dU/dr), no cut-off ----
+struct MorseLaw {
+  double depth, kappa;  // V0 [kT], kappa [1/a]
+  EnergyDerivative operator()(double r, double ai, double aj) const;
+};
+
+struct DlvoLaw {  // includes the min-gap floor
+  double hamaker, kappa, Z, psi_reduced, sigma, min_gap;
+  PairForceParams::DoubleLayer double_layer;
+  EnergyDerivative operator()(double r, double ai, double aj) const;
+  EnergyDerivative unregularised(double r, double ai, double aj) const;
+};
+
+struct HertzLaw {
+  double stiffness;  // k_H [kT/a^{5/2}]
+  EnergyDerivative operator()(double r, double ai, double aj) const;
+};
+
+// Build the evaluators; throw std::invalid_argument for kappa <= 0 or (DLVO) min_gap <= 0.
+MorseLaw morse_law(const PairForceParams& p);
+DlvoLaw dlvo_law(const PairForceParams& p);
+HertzLaw hertz_law(const PairForceParams& p);
+
+// Relative energy left at the default cut-off.
+constexpr double kDefaultCutoffTolerance = 1e-4;
+
+// Default gap cut-off [a] for spheres up to radius a_max: Morse ln(2/tol)/kappa; DLVO the larger of
+// ln(1/tol)/kappa (double layer, relative to its contact scale 2 Z a_eff) and the gap where
+// |U_vdW(a_max, a_max)| = tol A (Born is far shorter-ranged); Hertz 0.
+double default_cutoff(const PairForceParams& p, double a_max);
+// p.cutoff if positive, else default_cutoff. Hertz: max(p.cutoff, 0).
+double resolved_cutoff(const PairForceParams& p, double a_max);
+
+// One law as the pair loop applies it: shifted at the gap cut-off h_c, zero for h >= h_c.
+EnergyDerivative pair_energy(const PairForceParams& p, double cutoff_gap, double r, double ai, double aj);
+
+struct PairForceTotals {
+  double energy = 0.0;            // sum over pairs of the shifted pair energies [kT]
+  Mat3 virial = Mat3::Zero();     // sum over pairs of r_ij F_i^T [kT]
+};
+
+// Adds the forces of all laws on all pairs (one trees::neighbor_pairs search with the largest
+// range) to `force` (resized to N if empty, else must have N entries); optionally accumulates
+// energy and virial into *totals. Pairs with coincident centres get no force (no direction).
+// Periodic boxes must be at least twice the largest interaction range (trees/neighbor_list.hpp).
+// Deterministic: pair terms are evaluated in parallel into a buffer and summed serially.
+void add_pair_forces(const std::vector<PairForceParams>& laws, const std::vector<Vec3>& x,
+                     const std::vector<double>& radius, const Domain& domain, std::vector<Vec3>& force,
+                     PairForceTotals* totals = nullptr);
+
+}  // namespace stokesian::forces

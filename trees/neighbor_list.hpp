@@ -1,0 +1,46 @@
+#pragma once
+// Neighbour search: every pair of spheres whose surface gap h = |r_ij| - a_i - a_j is below a
+// cut-off gap, in open space or in a periodic (optionally Lees-Edwards sheared) box.
+//
+// Geometry. A periodic box is the lattice spanned by a1 = (Lx, 0, 0), a2 = (gamma Ly, Ly, 0),
+// a3 = (0, 0, Lz) (gamma = Domain::shear_strain). Fractional coordinates s = A^{-1} x with
+// A = [a1 a2 a3] are periodic on the unit cube: s_x = (x - gamma y)/Lx, s_y = y/Ly, s_z = z/Lz.
+// The cell list bins s into n_k cells along each lattice direction with n_k = floor(w_k / R),
+// where R = cutoff_gap + 2 max(a) is the largest interaction range and w_k the distance between
+// lattice planes (w_x = Lx / sqrt(1 + gamma'^2) with gamma' the strain reduced to
+// |gamma' Ly| <= Lx/2, w_y = Ly, w_z = Lz). Two centres closer than R then differ by at most one
+// cell index in each direction, so the 27-cell stencil finds every pair.
+//
+// Contract (periodic): each unordered pair appears at most once, with r the minimum image. That
+// representation is exact only if no pair has two images in range, which holds when
+// R <= min(Lx, Ly, Lz) / 2 (the shortest lattice vector is at least min(Lx, Ly, Lz), and then
+// Domain::minimum_image returns the nearest image for any separation below min(L)/2). Smaller
+// boxes are rejected with std::invalid_argument. When a direction has fewer than 3 cells the
+// stencil would visit a cell twice; the search then falls back to the O(N^2) loop, which is exact
+// under the same contract.
+#include "engine/state.hpp"
+#include "engine/types.hpp"
+
+#include <vector>
+
+namespace stokesian::trees {
+
+struct NeighborPair {
+  int i, j;     // particle indices, i < j
+  Vec3 r;       // x_i - x_j, minimum image in periodic boxes [a]
+  double dist;  // |r| [a]
+};
+
+// All pairs with |r_ij| < cutoff_gap + a_i + a_j, sorted by (i, j). Cell list, O(N) for bounded
+// density; OpenMP over particles, output independent of the thread count.
+// x, radius: N entries each (units of a). Throws std::invalid_argument on size mismatch or a
+// periodic box smaller than twice the interaction range (see contract above).
+std::vector<NeighborPair> neighbor_pairs(const std::vector<Vec3>& x, const std::vector<double>& radius,
+                                         const Domain& domain, double cutoff_gap);
+
+// Same result by the plain O(N^2) double loop: the reference the cell list is tested against.
+std::vector<NeighborPair> neighbor_pairs_bruteforce(const std::vector<Vec3>& x,
+                                                    const std::vector<double>& radius,
+                                                    const Domain& domain, double cutoff_gap);
+
+}  // namespace stokesian::trees
