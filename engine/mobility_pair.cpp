@@ -114,7 +114,38 @@ PairRegime pair_regime(double a, double b, double r) {
   return PairRegime::overlapping;
 }
 
+namespace {
+// Separated pairs (the hot path): 8 pi mu Psi = r + c/r, so with u = 1/r the scalars are
+// (tools/derive_scalars_table.py, columns m = -1 and m = 1 of kC):
+//   xa = 2u - 2cu^3, ya = u + cu^3, yb = u^2, xc = u^3, yc = -u^3/2, xg = -3u^2 + 9cu^4,
+//   yg = -3cu^4, yh = -3u^3/2, xm = -6u^3 + 36cu^5, ym = 3u^3 - 24cu^5, zm = 6cu^5.
+PairScalars separated_scalars(double a, double b, double r, double mu, Moments m) {
+  const double k = 1.0 / (8.0 * kPi * mu), u = 1.0 / r, u2 = u * u, u3 = u2 * u, u4 = u2 * u2, u5 = u4 * u;
+  const double a2 = a * a, b2 = b * b;
+  PairScalars s;
+  const double cff = (a2 + b2) / 3.0;
+  s.xa = k * (2.0 * u - 2.0 * cff * u3);
+  s.ya = k * (u + cff * u3);
+  if (m == Moments::F) return s;
+  s.yb = s.ybt = k * u2;
+  s.xc = k * u3;
+  s.yc = -0.5 * k * u3;
+  if (m == Moments::FT) return s;
+  const double ctf = a2 / 5.0 + b2 / 3.0, cft = a2 / 3.0 + b2 / 5.0, ctt = (a2 + b2) / 5.0;
+  s.xg = k * (-3.0 * u2 + 9.0 * ctf * u4);
+  s.yg = -3.0 * k * ctf * u4;
+  s.xgt = -k * (-3.0 * u2 + 9.0 * cft * u4);
+  s.ygt = 3.0 * k * cft * u4;
+  s.yh = s.yht = -1.5 * k * u3;
+  s.xm = k * (-6.0 * u3 + 36.0 * ctt * u5);
+  s.ym = k * (3.0 * u3 - 24.0 * ctt * u5);
+  s.zm = 6.0 * k * ctt * u5;
+  return s;
+}
+}  // namespace
+
 PairScalars pair_scalars(double a, double b, double r, double mu, Moments m) {
+  if (r >= a + b) return separated_scalars(a, b, r, mu, m);
   const double k = 1.0 / (8.0 * kPi * mu);
   PairScalars s;
   const PsiPoly ff = psi_poly(0, 0, a, b, r);

@@ -147,7 +147,14 @@ io::Frame Simulation::frame(const State& s, const Evaluation& ev) const {
     f.vectors["stresslet_sum"] = std::vector<double>(t6.data(), t6.data() + 6);
   }
   // Overlap and gap diagnostics (shared/notes/method.md s.3: count and report overlaps).
-  const auto pairs = trees::neighbor_pairs(s.position, s.radius, s.domain, 1.0);
+  // Gap range of the search: 1 a, reduced in small periodic boxes to what the minimum image allows.
+  double range = 1.0;
+  if (s.domain.periodic()) {
+    const double amax = *std::max_element(s.radius.begin(), s.radius.end());
+    range = std::min(range, 0.5 * s.domain.box.minCoeff() - 2.0 * amax - 1e-9);
+  }
+  const auto pairs = range >= 0 ? trees::neighbor_pairs(s.position, s.radius, s.domain, range)
+                                : trees::neighbor_pairs_bruteforce(s.position, s.radius, s.domain, 0.0);
   double min_gap = INFINITY;
   long overlaps = 0;
   for (const auto& p : pairs) {
