@@ -1,0 +1,58 @@
+// Benchmark: direct far-field mobility product (open domain) against N, F/FT/FTS, 1 and 2 threads;
+// dense assembly for small N as the reference cost. Phases: "product" (matrix-free y = M x),
+// "dense_assembly" (dense_mobility), "dense_matvec" (M x with the assembled matrix).
+//   bench_far_field [--quick] [--out DIR]
+#include "bench/harness.hpp"
+#include "engine/far_field.hpp"
+
+#include <omp.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <random>
+
+using namespace stokesian;
+
+int main(int argc, char** argv) {
+  bool quick = false;
+  std::string out = "bench/results";
+  for (int i = 1; i < argc; ++i) {
+    if (!std::strcmp(argv[i], "--quick")) quick = true;
+    else if (!std::strcmp(argv[i], "--out") && i + 1 < argc) out = argv[++i];
+  }
+  const std::vector<long> sizes = quick ? std::vector<long>{100, 200, 400} : std::vector<long>{100, 200, 400, 800, 1600, 3200, 6400};
+  bench::Results res(quick ? "far_field_direct_quick" : "far_field_direct");
+  const int max_threads = std::min(2, omp_get_max_threads());
+  for (Moments m : {Moments::F, Moments::FT, Moments::FTS}) {
+    for (long n : sizes) {
+      // Random non-overlapping-ish cloud at volume fraction 0.1, radii 0.5-1.5.
+      std::mt19937_64 rng(n);
+      std::uniform_real_distribution<double> u(0, 1);
+      const double L = std::cbrt(double(n) * 4.19 / 0.1);
+      std::vector<Vec3> x;
+      std::vector<double> a;
+      for (long i = 0; i < n; ++i) {
+        x.emplace_back(L * u(rng), L * u(rng), L * u(rng));
+        a.push_back(0.5 + u(rng));
+      }
+      VecX v = VecX::Random(n * dof_per_particle(m)), y;
+      for (int threads = 1; threads <= max_threads; ++threads) {
+        omp_set_num_threads(threads);
+        const int reps = n <= 800 ? 5 : 3;
+        std::map<std::string, double> phases;
+        phases["product"] = bench::median_time([&] { mobility_product(x, a, 1.0, m, v, y); }, reps);
+        if (n <= 1600 && threads == 1) {
+          MatX M;
+          phases["dense_assembly"] = bench::median_time([&] { M = dense_mobility(x, a, 1.0, m); }, 1);
+          phases["dense_matvec"] = bench::median_time([&] { y = M * v; }, reps);
+        }
+        res.add({{"N", double(n)}, {"threads", double(threads)}, {"dof", double(dof_per_particle(m))}}, phases);
+        std::printf("%-3s N=%5ld threads=%d product %.3e s\n", to_string(m), n, threads, phases["product"]);
+        std::fflush(stdout);
+      }
+    }
+  }
+  std::printf("wrote %s\n", res.write(out).c_str());
+  return 0;
+}

@@ -1,0 +1,44 @@
+#pragma once
+// Benchmark harness: named phase timers, machine metadata, and a JSON results file that the plot
+// scripts in bench/ read. Timings are wall-clock medians over repeats; report ratios (method vs
+// direct, 2 threads vs 1) because shared machines are noisy.
+#include <algorithm>
+#include <chrono>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace stokesian::bench {
+
+// Machine and build metadata: host, CPU model, logical cores, OpenMP max threads, compiler,
+// build type, git revision, UTC date.
+std::map<std::string, std::string> machine_metadata();
+
+class Results {
+ public:
+  explicit Results(std::string name) : name_(std::move(name)) {}
+  // One measurement row: named parameters (N, threads, ...) and named phase times in seconds.
+  void add(const std::map<std::string, double>& params, const std::map<std::string, double>& phases);
+  // Writes bench/results/<name>.json (or `path`): {"benchmark", "machine", "rows": [...]}.
+  std::string write(const std::string& dir) const;
+
+ private:
+  std::string name_;
+  std::vector<std::pair<std::map<std::string, double>, std::map<std::string, double>>> rows_;
+};
+
+// Median wall time of `repeats` calls of f (seconds); one untimed warm-up call first.
+template <class F>
+double median_time(F&& f, int repeats) {
+  f();
+  std::vector<double> t;
+  for (int r = 0; r < repeats; ++r) {
+    const auto a = std::chrono::steady_clock::now();
+    f();
+    t.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count());
+  }
+  std::sort(t.begin(), t.end());
+  return t[t.size() / 2];
+}
+
+}  // namespace stokesian::bench

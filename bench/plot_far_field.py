@@ -1,0 +1,55 @@
+#!/usr/bin/python3
+"""Chart the direct far-field benchmark: time per mobility product against N with the fitted
+exponent (log-log least squares over N >= 400, or all points for short runs), and the 2-thread speed-up.
+
+usage: plot_far_field.py [RESULTS.json] [OUT.png]   (defaults: bench/results/far_field_direct.json)
+Uses only Debian's python3-numpy and python3-matplotlib.
+"""
+import json
+import sys
+
+import matplotlib
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+
+src = sys.argv[1] if len(sys.argv) > 1 else "bench/results/far_field_direct.json"
+out = sys.argv[2] if len(sys.argv) > 2 else src.replace(".json", ".png")
+data = json.load(open(src))
+rows = data["rows"]
+fig, (ax, ax2) = plt.subplots(1, 2, figsize=(11, 4.5))
+names = {3: "F", 6: "FT", 11: "FTS"}
+summary = []
+for dof, name in names.items():
+    for threads, style in ((1, "-o"), (2, "--s")):
+        pts = sorted((r["params"]["N"], r["phases"]["product"]) for r in rows
+                     if r["params"]["dof"] == dof and r["params"]["threads"] == threads)
+        if not pts:
+            continue
+        n, t = np.array(pts).T
+        fit = n >= 400
+        if fit.sum() < 3:  # short (CI) runs: fit every point
+            fit = n > 0
+        p = np.polyfit(np.log(n[fit]), np.log(t[fit]), 1)[0]
+        ax.loglog(n, t, style, label=f"{name}, {threads} thr (slope {p:.2f})")
+        summary.append((name, threads, p))
+    one = {r["params"]["N"]: r["phases"]["product"] for r in rows if r["params"]["dof"] == dof and r["params"]["threads"] == 1}
+    two = {r["params"]["N"]: r["phases"]["product"] for r in rows if r["params"]["dof"] == dof and r["params"]["threads"] == 2}
+    common = sorted(set(one) & set(two))
+    if common:
+        ax2.semilogx(common, [one[k] / two[k] for k in common], "-o", label=name)
+ax.set_xlabel("N particles")
+ax.set_ylabel("time per product y = M x [s]")
+ax.set_title("direct far field, open domain")
+ax.legend(fontsize=8)
+ax2.axhline(2.0, color="grey", lw=0.5)
+ax2.set_xlabel("N particles")
+ax2.set_ylabel("speed-up, 2 threads / 1 thread")
+ax2.legend(fontsize=8)
+m = data["machine"]
+fig.suptitle(f"{m.get('cpu', '?')}, {m.get('compiler', '?')}, {m.get('git', '?')}, {m.get('date', '?')}", fontsize=8)
+fig.tight_layout()
+fig.savefig(out, dpi=120)
+for name, threads, p in summary:
+    print(f"{name:3s} {threads} thread(s): fitted exponent {p:.2f}")
+print("wrote", out)
