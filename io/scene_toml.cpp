@@ -8,6 +8,7 @@
 #include <toml++/toml.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -201,8 +202,6 @@ void read_particles(const Reader& R, const toml::table& t, Scene& s, const std::
     PlacementParams p;
     p.pattern = R.choice(t, T, "generate", "random", {"random", "lattice"}) == "lattice"
                     ? PlacementParams::Pattern::lattice : PlacementParams::Pattern::random;
-    if (!t.contains("count")) R.fail(&t, "[particles] count", "required with generate");
-    p.count = R.integer(t, T, "count", 0, 1, 10000000);
     p.volume_fraction = R.number(t, T, "volume_fraction", 0.1, 0.0, 0.74, true);
     p.radius = R.number(t, T, "radius", 1.0, 0.0, 1e6, true);
     const std::string sd = R.choice(t, T, "size_distribution", "monodisperse", {"monodisperse", "bidisperse", "lognormal"});
@@ -212,6 +211,27 @@ void read_particles(const Reader& R, const toml::table& t, Scene& s, const std::
     p.large_fraction = R.number(t, T, "large_fraction", 0.5, 0.0, 1.0);
     p.sigma = R.number(t, T, "sigma", 0.2, 0.0, 2.0);
     p.seed = std::uint64_t(R.integer(t, T, "seed", 1, 0, std::numeric_limits<long>::max()));
+    // Open domains: count is required and volume_fraction sets the filled region. Periodic boxes:
+    // the box fixes the volume, so give count or volume_fraction, not both.
+    if (s.domain.periodic()) {
+      if (t.contains("count") == t.contains("volume_fraction"))
+        R.fail(&t, "[particles] count/volume_fraction", "in a periodic box give exactly one of count and volume_fraction");
+      if (t.contains("count")) {
+        p.count = R.integer(t, T, "count", 0, 1, 10000000);
+        p.volume_fraction = 0.0;
+      } else {
+        const double a3 = p.radius * p.radius * p.radius;
+        double mean_a3 = a3;
+        if (p.sizes == PlacementParams::Sizes::bidisperse)
+          mean_a3 = a3 * (1.0 - p.large_fraction + p.large_fraction * std::pow(p.radius_ratio, 3));
+        else if (p.sizes == PlacementParams::Sizes::lognormal)
+          mean_a3 = a3 * std::exp(4.5 * p.sigma * p.sigma);
+        p.count = std::max(1L, std::lround(p.volume_fraction * s.domain.box.prod() / (4.0 / 3.0 * M_PI * mean_a3)));
+      }
+    } else {
+      if (!t.contains("count")) R.fail(&t, "[particles] count", "required with generate in an open domain");
+      p.count = R.integer(t, T, "count", 0, 1, 10000000);
+    }
     try {
       const Placement pl = place_particles(p, s.domain.periodic() ? s.domain.box : Vec3::Zero());
       s.positions = pl.position;

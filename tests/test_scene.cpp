@@ -1,0 +1,148 @@
+// Scene files: defaults, generation, and clear errors for bad input (file, line, key, allowed
+// values), through the library and through the command line (non-zero exit, nothing written).
+#include <doctest/doctest.h>
+
+#include "engine/errors.hpp"
+#include "engine/model.hpp"
+#include "io/scene_toml.hpp"
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+using namespace stokesian;
+
+namespace {
+
+// The ConfigError message for `text`, or "" if it parses.
+std::string error_of(const std::string& text) {
+  try {
+    const Scene s = io::parse_scene(text, "bad.toml");
+    resolve_model(s);
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
+
+const std::string kTwo = "[particles]\npositions = [[0,0,0],[3,0,0]]\n";
+
+}  // namespace
+
+TEST_CASE("a minimal scene gets the documented defaults") {
+  const Scene s = io::parse_scene(kTwo, "min.toml");
+  CHECK(s.positions.size() == 2);
+  CHECK(s.radii == std::vector<double>{1.0, 1.0});
+  CHECK(s.fluid.viscosity == 1.0);
+  CHECK(s.fluid.kT == 0.0);
+  CHECK(s.time.dt == 1e-3);
+  CHECK(s.hydro.tolerance == 1e-6);
+  CHECK(!s.domain.periodic());
+  const ResolvedModel m = resolve_model(s);
+  CHECK(m.level == HydroModel::far_field);
+  CHECK(m.moments == Moments::F);
+  CHECK(!m.brownian);
+}
+
+TEST_CASE("model resolution: cheapest adequate level and moments, recorded with reasons") {
+  auto model = [](const std::string& extra) { return resolve_model(io::parse_scene(kTwo + extra, "m.toml")); };
+  CHECK(model("[flow]\nkind = \"simple_shear\"\nrate = 1.0\n").moments == Moments::FTS);
+  CHECK(model("[forces]\nexternal_torque = [0, 0, 1]\n").moments == Moments::FT);
+  CHECK(model("[hydrodynamics]\nmodel = \"free_draining\"\n").level == HydroModel::free_draining);
+  CHECK(model("[hydrodynamics]\nmoments = \"FTS\"\n").moments == Moments::FTS);
+  CHECK(resolve_model(io::parse_scene("[particles]\npositions = [[0,0,0]]\n", "one.toml")).level ==
+        HydroModel::free_draining);
+  CHECK(contains(model("").describe(), "auto level"));
+}
+
+TEST_CASE("generated configurations honour count, volume fraction and non-overlap") {
+  const Scene s = io::parse_scene(
+      "[domain]\nkind = \"periodic\"\nbox = [30, 30, 30]\n[particles]\ngenerate = \"random\"\ncount = 200\n"
+      "size_distribution = \"bidisperse\"\nradius_ratio = 2.0\nseed = 3\n",
+      "gen.toml");
+  REQUIRE(s.positions.size() == 200);
+  for (std::size_t i = 0; i < 200; ++i)
+    for (std::size_t j = i + 1; j < 200; ++j)
+      CHECK(s.domain.minimum_image(s.positions[i] - s.positions[j]).norm() >= s.radii[i] + s.radii[j]);
+  // In a periodic box the volume fraction fixes the count (bidisperse 1:2, half large: mean a^3 = 4.5).
+  const Scene phi = io::parse_scene(
+      "[domain]\nkind = \"periodic\"\nbox = [30, 30, 30]\n[particles]\ngenerate = \"random\"\nvolume_fraction = 0.2\n"
+      "size_distribution = \"bidisperse\"\nradius_ratio = 2.0\n",
+      "phi.toml");
+  CHECK(phi.positions.size() == std::size_t(std::lround(0.2 * 27000 / (4.0 / 3.0 * M_PI * 4.5))));
+  CHECK(error_of("[domain]\nkind = \"periodic\"\nbox = [30, 30, 30]\n[particles]\ngenerate = \"random\"\ncount = 5\n"
+                 "volume_fraction = 0.2\n").find("exactly one of count and volume_fraction") != std::string::npos);
+  const Scene open = io::parse_scene(
+      "[particles]\ngenerate = \"lattice\"\ncount = 27\nvolume_fraction = 0.2\n", "lat.toml");
+  double vol = 0;
+  for (double a : open.radii) vol += 4.0 / 3.0 * M_PI * a * a * a;
+  CHECK(open.positions.size() == 27);
+  CHECK(vol == doctest::Approx(27 * 4.0 / 3.0 * M_PI));
+}
+
+TEST_CASE("bad input names the file, line, key and allowed values") {
+  std::string e = error_of(kTwo + "[time]\ndt = -1.0\n");
+  CHECK(contains(e, "bad.toml:4"));
+  CHECK(contains(e, "[time] dt"));
+  CHECK(contains(e, "out of range"));
+
+  e = error_of(kTwo + "[fluid]\nviscosty = 2.0\n");
+  CHECK(contains(e, "[fluid] viscosty"));
+  CHECK(contains(e, "unknown key"));
+  CHECK(contains(e, "viscosity"));
+
+  e = error_of(kTwo + "[hydrodynamics]\nmodel = \"lattice_boltzmann\"\n");
+  CHECK(contains(e, "\"free_draining\""));
+
+  e = error_of(kTwo + "[time]\nsteps = \"ten\"\n");
+  CHECK(contains(e, "expected an integer"));
+
+  e = error_of("[particles]\npositions = [[0,0,0],[3,0,0]]\nradii = [1.0]\n");
+  CHECK(contains(e, "radii"));
+  CHECK(contains(e, "1 entries for 2 positions"));
+
+  e = error_of("[particles]\npositions = [[0,0,0]]\ngenerate = \"random\"\ncount = 3\n");
+  CHECK(contains(e, "exactly one of"));
+
+  e = error_of(kTwo + "[output]\nevery = 3\ncheckpoint_every = 10\n");
+  CHECK(contains(e, "multiple"));
+
+  e = error_of(kTwo + "[time\ndt = 1\n");
+  CHECK(contains(e, "TOML syntax error"));
+
+  e = error_of(kTwo + "[forces]\nexternal_force = [[0,0,1],[0,0,1],[0,0,1]]\n");
+  CHECK(contains(e, "3 vectors for 2 particles"));
+
+  e = error_of(kTwo + "[[forces.pair]]\nkind = \"morse\"\nstiffness = 3\n");
+  CHECK(contains(e, "unknown key"));
+}
+
+TEST_CASE("asking for a model the engine lacks is an error, not a fallback") {
+  CHECK(contains(error_of(kTwo + "[hydrodynamics]\nmodel = \"stokesian\"\n"), "model"));
+  CHECK(contains(error_of(kTwo + "[hydrodynamics]\nfar_field = \"tree\"\n"), "not in this version"));
+  CHECK(contains(error_of(kTwo + "[fluid]\nkT = 1.0\n[flow]\nkind = \"simple_shear\"\nrate = 1.0\n"), "FTS"));
+  CHECK(contains(error_of(kTwo + "[fluid]\nkT = 1.0\n[time]\nintegrator = \"rkf45\"\n"), "rkf45"));
+  CHECK(contains(error_of(kTwo + "[forces]\nexternal_torque = [0,0,1]\n[hydrodynamics]\nmoments = \"F\"\n"), "torques"));
+}
+
+TEST_CASE("command line: a bad scene exits non-zero and writes nothing") {
+  const auto dir = std::filesystem::temp_directory_path() / "stokesian_test_scene";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const auto scene = dir / "bad.toml";
+  std::ofstream(scene) << kTwo << "[time]\ndt = 0\n";
+  const auto out = dir / "out.h5";
+  const std::string cmd = std::string(STOKESIAN_BINARY) + " run " + scene.string() + " --out " + out.string() +
+                          " --quiet 2> " + (dir / "err.txt").string();
+  const int status = std::system(cmd.c_str());
+  CHECK(WEXITSTATUS(status) == 2);
+  CHECK(!std::filesystem::exists(out));
+  CHECK(!std::filesystem::exists(out.string() + ".ckpt"));
+  std::ifstream err(dir / "err.txt");
+  const std::string msg((std::istreambuf_iterator<char>(err)), std::istreambuf_iterator<char>());
+  CHECK(contains(msg, "bad.toml:4: [time] dt"));
+  std::filesystem::remove_all(dir);
+}
