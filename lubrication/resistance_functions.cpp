@@ -1,0 +1,569 @@
+// Two-sphere resistance functions: twin-multipole series plus near-contact resummation.
+//
+// Mathematics implemented (details and accuracy: docs/lubrication.md):
+//
+// 1. Twin-multipole recurrences (JO84 eqs. 3.9-3.10 for X^A, 4.6-4.11 for Y^A and Y^C,
+//    J92 eqs. 58 and 73-76 for the M functions, with the corrections of Townsend,
+//    arXiv:1802.08226 v4, eqs. 5-8 and 18).  Three families of recurrences ("X", "Y", "Z"
+//    type, for azimuthal mode m = 0, 1, 2) for the lambda-independent numbers P_npq, Q_npq,
+//    V_npq; different initial conditions give the different problems:
+//       XA: P=V=delta_1n   YA: P=V=delta_1n, Q=0   YC: Q=delta_1n, P=V=0
+//       XM: P=V=delta_2n   YM: P=V=delta_2n, Q=0   ZM: P=V=delta_2n, Q=0.
+// 2. Series (JO84 eq. 3.12-3.15, J92 eqs. 20, 28, 36, 49, 65, 80; Ichiki et al. 2013):
+//       F_nat(s) = sum_k c_k t^k,   t = 2/s,   c_k = f_k(lambda) / (2 (1+lambda))^k,
+//    with f_k = 2^k sum_q P_{n, k-q, q} lambda^q (times lambda^(k mod 2) for C, H, M type).
+//    Self functions ("11") use one parity of k, cross functions ("12") the other.  The
+//    cross functions are converted from the natural scale of sphere 1 (6 pi mu a1,
+//    4 pi mu a1^2, 8 pi mu a1^3, ...) to the JO normalisation by the factor (2/(1+lambda))^m.
+// 3. Near contact (JO84 sections 3-7, J92): c_k -> a_k = g1 + 2 g2/k - 4 g3/(k(k+2)) as
+//    k -> infinity, with g1, g2, g3 the published lubrication coefficients (JO84 eqs. 3.19,
+//    4.16, 5.6, 7.10; J92 eqs. 19b, 27b, 35b, 48b, 64b, 79b).  We write
+//       F_nat = sum_k (c_k - a_k) t^k + g1 S1(t) + g2 S2(t) - g3 S3(t),
+//    where S1..S3 are the exact sums of t^k, 2t^k/k, 4t^k/(k(k+2)) over the parity (closed
+//    forms below).  This is an identity for every t < 1; as t -> 1 (xi -> 0) it reduces to
+//    the JO form g1/xi + g2 ln(1/xi) + A + g3 xi ln(1/xi) + ..., and the O(1) constant A is
+//    the JO "series minus singular terms" limit (JO84 eqs. 3.22-3.23 etc.).  The remainder
+//    sum converges like k^-3 at t = 1, so the near-contact evaluation is uniform in xi.
+// 4. X^C: exact bispherical-coordinate solution for rotation about the line of centres
+//    (Jeffery 1915, Proc. Lond. Math. Soc. 14, 327; quoted in JO84 section 6):
+//       T_1 = 8 pi mu c^3 Omega_1 sum_{n>=0} csch^3((n+1) alpha + n beta),
+//       T_2 = -8 pi mu c^3 Omega_1 sum_{n>=1} csch^3(n (alpha + beta)),
+//    c = a1 sinh(alpha) = a2 sinh(beta); tails summed by Euler-Maclaurin.  Its contact limit
+//    is the Hurwitz-zeta form of JO84 eq. 6.? / Townsend eqs. 26-27.
+
+#include "lubrication/resistance_functions.hpp"
+
+#include <cmath>
+#include <algorithm>
+#include <cstddef>
+#include <memory>
+#include <mutex>
+#include <stdexcept>
+
+namespace stokesian::lubrication {
+namespace {
+
+constexpr double kLn2 = 0.69314718055994530942;
+
+// ---------------------------------------------------------------------------------------------
+// Twin-multipole recurrences.  Values T(n, p, q) for n >= 1, p, q >= 0, n + p + q <= L are
+// stored at [q][n + p][n] (packed), so that the sums over s in the recurrences, which read
+// T(s, m - s, c) for fixed m and c, walk contiguous memory.
+enum class Kind { X, Y, Z };
+
+class Recurrence {
+ public:
+  Recurrence(Kind kind, int n0, bool init_pv, bool init_q, int L)
+      : L_(L), off_(static_cast<std::size_t>(L) + 2, 0) {
+    std::size_t total = 0;
+    for (int c = 0; c <= L; ++c) {
+      off_[c] = total;
+      const std::size_t mm = static_cast<std::size_t>(L - c) + 1;  // m = 0..L-c
+      total += mm * (mm + 1) / 2;
+    }
+    P_.assign(total, 0.0);
+    V_.assign(total, 0.0);
+    if (kind != Kind::X) Q_.assign(total, 0.0);
+    run(kind, n0, init_pv, init_q);
+  }
+
+  // T(n, p, q) with zero outside the stored range.
+  double P(int n, int p, int q) const { return get(P_, n, p, q); }
+  double Q(int n, int p, int q) const { return Q_.empty() ? 0.0 : get(Q_, n, p, q); }
+
+ private:
+  std::size_t idx(int n, int a, int c) const {  // element T(n, a, c)
+    const std::size_t m = static_cast<std::size_t>(n + a);
+    return off_[c] + m * (m + 1) / 2 + static_cast<std::size_t>(n);
+  }
+  double get(const std::vector<double>& T, int n, int a, int c) const {
+    if (n < 1 || a < 0 || c < 0 || n + a + c > L_) return 0.0;
+    return T[idx(n, a, c)];
+  }
+  // Pointer to T(s, m - s, c) for s = 0..m (s = 0 slot unused), or nullptr if empty.
+  const double* row(const std::vector<double>& T, int m, int c) const {
+    if (m < 0 || c < 0 || m + c > L_) return nullptr;
+    return &T[off_[c] + static_cast<std::size_t>(m) * (m + 1) / 2];
+  }
+
+  void run(Kind kind, int n0, bool init_pv, bool init_q) {
+    const int L = L_;
+    const int smin = (kind == Kind::Z) ? 2 : 1;
+    // binom[a][b] = C(a, b) for a <= 2L + 2.
+    const int B = 2 * L + 3;
+    std::vector<double> binom(static_cast<std::size_t>(B) * B, 0.0);
+    auto C = [&](int a, int b) -> double& { return binom[static_cast<std::size_t>(a) * B + b]; };
+    for (int a = 0; a < B; ++a) {
+      C(a, 0) = 1.0;
+      for (int b = 1; b <= a; ++b) C(a, b) = C(a - 1, b - 1) + (b < a ? C(a - 1, b) : 0.0);
+    }
+    std::vector<double> w1(L + 2), w2(L + 2), w3(L + 2), w4(L + 2), wq1(L + 2), wq2(L + 2),
+        wv(L + 2);
+    for (int lev = 1; lev <= L; ++lev) {
+      for (int n = smin; n <= lev; ++n) {
+        const double nn = n;
+        // s-dependent weights (binomial included) for this n.
+        for (int s = smin; s <= lev; ++s) {
+          const double ss = s;
+          if (kind == Kind::X) {
+            const double b = C(n + s, n);
+            w1[s] = b * nn * (2 * nn + 1) * (2 * nn * ss - nn - ss + 2) /
+                    (2 * (nn + 1) * (2 * ss - 1) * (nn + ss));
+            w2[s] = -b * nn * (2 * nn - 1) / (2 * (nn + 1));
+            w3[s] = -b * nn * (4 * nn * nn - 1) / (2 * (nn + 1) * (2 * ss + 1));
+            wv[s] = b;
+          } else if (kind == Kind::Y) {
+            const double b = C(n + s, n + 1);
+            w1[s] = b * (2 * nn + 1) / (2 * (nn + 1)) *
+                    (3 * (nn + ss) - (nn * ss + 1) * (2 * nn * ss - ss - nn + 2)) /
+                    (ss * (nn + ss) * (2 * ss - 1));
+            w2[s] = b * nn * (2 * nn - 1) / (2 * (nn + 1));
+            w3[s] = b * nn * (4 * nn * nn - 1) / (2 * (nn + 1) * (2 * ss + 1));
+            w4[s] = -b * 2 * (4 * nn * nn - 1) / (3 * (nn + 1));
+            wq1[s] = b * ss / (nn + 1);
+            wq2[s] = -b * 3 / (2 * nn * ss * (nn + 1));
+            wv[s] = b;
+          } else {
+            const double b = C(n + s, n + 2);
+            w1[s] = b * (2 * nn + 1) / (nn + 1) *
+                    (nn * ss * (nn + ss - 2 * nn * ss - 2) - 4 * (2 * nn * ss - 4 * ss - 4 * nn + 2)) /
+                    (2 * ss * (nn + ss) * (2 * ss - 1));
+            w2[s] = b * nn * (2 * nn - 1) / (2 * (nn + 1));
+            w3[s] = b * nn * (2 * nn + 1) * (2 * nn - 1) / (2 * (nn + 1) * (2 * ss + 1));
+            w4[s] = -b * 2 * (2 * nn + 1) * (2 * nn - 1) / (nn + 1);
+            wq1[s] = b * ss / (nn + 1);
+            wq2[s] = -b * 2 / (nn * ss * (nn + 1));
+            wv[s] = b;
+          }
+        }
+        for (int p = 0; p <= lev - n; ++p) {
+          const int q = lev - n - p;
+          const std::size_t i = idx(n, p, q);
+          if (p == 0 && q == 0) {
+            if (n == n0) {
+              if (init_pv) P_[i] = V_[i] = 1.0;
+              if (init_q) Q_[i] = 1.0;
+            }
+            continue;
+          }
+          if (p < n - 1) continue;  // every term needs p - n + 1 >= 0
+          // Sums over s = smin..q of weight(s) * T(s, q - s [- 1, - 2], c).
+          auto dot = [&](const std::vector<double>& T, const std::vector<double>& w, int m,
+                         int c, int smax) {
+            const double* rp = row(T, m, c);
+            if (!rp) return 0.0;
+            double acc = 0.0;
+            const int top = std::min(smax, m);
+            for (int s = smin; s <= top; ++s) acc += w[s] * rp[s];
+            return acc;
+          };
+          const int c1 = p - n + 1, c2 = p - n - 1, c0 = p - n;
+          double sP = dot(P_, w1, q, c1, q) + dot(P_, w2, q, c2, q) + dot(V_, w3, q - 2, c1, q);
+          double sV = dot(P_, wv, q, c2, q);
+          if (kind == Kind::X) {
+            P_[i] = sP;
+            V_[i] = sP - 2 * nn / ((nn + 1) * (2 * nn + 3)) * sV;
+          } else {
+            sP += dot(Q_, w4, q - 1, c1, q);
+            const double sQ = dot(Q_, wq1, q - 1, c0, q) + dot(P_, wq2, q, c0, q);
+            P_[i] = sP;
+            Q_[i] = sQ;
+            V_[i] = sP + 2 * nn / ((nn + 1) * (2 * nn + 3)) * sV;
+          }
+        }
+      }
+    }
+  }
+
+  int L_;
+  std::vector<std::size_t> off_;
+  std::vector<double> P_, Q_, V_;
+};
+
+// Lambda-independent coefficient arrays a[k][q] = (P or Q)_{n, k-q, q}, k = 0..K.
+struct Coefficients {
+  enum Id { XA_P1, YA_P1, YA_Q1, YC_Q1, XA_P2, YA_P2, YC_P2, XM_P2, YM_P2, ZM_P2, kCount };
+  std::array<std::vector<std::vector<double>>, kCount> a;
+};
+
+const Coefficients& coefficients() {
+  static Coefficients co;
+  static std::once_flag once;
+  std::call_once(once, [] {
+    const int K = kSeriesOrder;
+    const int L = K + 2;
+    auto extract = [K](const Recurrence& rec, int n, bool q_array) {
+      std::vector<std::vector<double>> out(K + 1);
+      for (int k = 0; k <= K; ++k) {
+        out[k].resize(k + 1);
+        for (int q = 0; q <= k; ++q) out[k][q] = q_array ? rec.Q(n, k - q, q) : rec.P(n, k - q, q);
+      }
+      return out;
+    };
+    Coefficients& c = co;
+#pragma omp parallel sections
+    {
+#pragma omp section
+      {
+        Recurrence xa(Kind::X, 1, true, false, L);
+        c.a[Coefficients::XA_P1] = extract(xa, 1, false);
+        c.a[Coefficients::XA_P2] = extract(xa, 2, false);
+      }
+#pragma omp section
+      {
+        Recurrence ya(Kind::Y, 1, true, false, L);
+        c.a[Coefficients::YA_P1] = extract(ya, 1, false);
+        c.a[Coefficients::YA_Q1] = extract(ya, 1, true);
+        c.a[Coefficients::YA_P2] = extract(ya, 2, false);
+      }
+#pragma omp section
+      {
+        Recurrence yc(Kind::Y, 1, false, true, L);
+        c.a[Coefficients::YC_Q1] = extract(yc, 1, true);
+        c.a[Coefficients::YC_P2] = extract(yc, 2, false);
+      }
+#pragma omp section
+      {
+        Recurrence xm(Kind::X, 2, true, false, L);
+        c.a[Coefficients::XM_P2] = extract(xm, 2, false);
+      }
+#pragma omp section
+      {
+        Recurrence ym(Kind::Y, 2, true, false, L);
+        c.a[Coefficients::YM_P2] = extract(ym, 2, false);
+      }
+#pragma omp section
+      {
+        Recurrence zm(Kind::Z, 2, true, false, L);
+        c.a[Coefficients::ZM_P2] = extract(zm, 2, false);
+      }
+    }
+  });
+  return co;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Sums over k >= 1 of the given parity of t^k, 2 t^k / k and 4 t^k / (k (k+2)).
+// one_minus_t2 = 1 - t^2 is passed separately (= xi (4 + xi) / s^2, no cancellation).
+struct SingularSums {
+  double S1, S2, S3;
+};
+
+SingularSums singular_sums(int parity, double t, double one_minus_t2) {
+  SingularSums r{};
+  if (t < 0.5) {  // direct power series (closed forms cancel for small t)
+    double tk = parity ? t : t * t;
+    for (int k = parity ? 1 : 2; k < 200; k += 2) {
+      r.S1 += tk;
+      r.S2 += 2.0 * tk / k;
+      r.S3 += 4.0 * tk / (k * (k + 2.0));
+      tk *= t * t;
+      if (tk < 1e-18) break;
+    }
+    return r;
+  }
+  const double t2 = t * t;
+  if (parity == 0) {
+    const double L = -std::log(one_minus_t2);  // sum 2 t^k / k (k even)
+    r.S1 = t2 / one_minus_t2;
+    r.S2 = L;
+    r.S3 = 1.0 - one_minus_t2 * L / t2;
+  } else {
+    const double L = std::log1p(2.0 * t / (1.0 - t));  // 2 atanh(t) = sum 2 t^k / k (k odd)
+    r.S1 = t / one_minus_t2;
+    r.S2 = L;
+    r.S3 = 2.0 / t - one_minus_t2 * L / t2;
+  }
+  return r;
+}
+
+// ---------------------------------------------------------------------------------------------
+// X^C from the exact bispherical solution.  csch^3 and the sum over n >= 0 of csch^3(y0 + n x).
+double csch3(double y) {
+  if (y > 20.0) {
+    const double e = std::exp(-y);
+    const double c = 2.0 * e / (1.0 - e * e);
+    return c * c * c;
+  }
+  const double c = 1.0 / std::sinh(y);
+  return c * c * c;
+}
+
+double sum_csch3(double y0, double x) {
+  double sum = 0.0;
+  const int N = 40;
+  for (int n = 0;; ++n) {
+    const double y = y0 + n * x;
+    if (n >= N && y < 2.0) {
+      // Euler-Maclaurin tail: int_n^inf F + F(n)/2 - F'(n)/12 + F'''(n)/720, F(n) = csch^3(y0+nx).
+      // The F''' term is below 1e-11 relative for n >= 40 and is dropped.
+      const double cs = 1.0 / std::sinh(y), ct = 1.0 / std::tanh(y);
+      const double integral = (0.5 * cs * ct + 0.5 * std::log(std::tanh(0.5 * y))) / x;
+      const double F = cs * cs * cs;
+      const double dF = -3.0 * x * F * ct;
+      sum += integral + 0.5 * F - dF / 12.0;
+      break;
+    }
+    const double term = csch3(y);
+    sum += term;
+    if (term < 1e-18 * sum) break;
+  }
+  return sum;
+}
+
+double acosh1p(double x) { return std::log1p(x + std::sqrt(x * (x + 2.0))); }
+
+// Near-contact coefficient functions (JO84, J92, as corrected by Townsend 2023).
+struct G3 {
+  double g1, g2, g3;
+};
+
+}  // namespace
+
+double hurwitz_zeta3(double a) {
+  // sum_{n>=0} (n+a)^-3: direct terms, then Euler-Maclaurin tail from n = N.
+  double sum = 0.0;
+  const int N = 20;
+  for (int n = 0; n < N; ++n) sum += 1.0 / std::pow(n + a, 3);
+  const double y = N + a;
+  sum += 0.5 / (y * y) + 0.5 / (y * y * y) + 0.25 / std::pow(y, 4) - 1.0 / (12.0 * std::pow(y, 6)) +
+         1.0 / (12.0 * std::pow(y, 8));
+  return sum;
+}
+
+double NearContactForm::operator()(double xi) const {
+  const double l = std::log(1.0 / xi);
+  return g1 / xi + g2 * l + constant + g3 * xi * l;
+}
+
+// ---------------------------------------------------------------------------------------------
+namespace {
+const char* const kNames[kNumScalars] = {"XA11", "XA12", "YA11", "YA12", "YB11", "YB12",
+                                         "XC11", "XC12", "YC11", "YC12", "XG11", "XG12",
+                                         "YG11", "YG12", "YH11", "YH12", "XM11", "XM12",
+                                         "YM11", "YM12", "ZM11", "ZM12"};
+enum Slot {
+  XA11, XA12, YA11, YA12, YB11, YB12, XC11, XC12, YC11, YC12, XG11, XG12,
+  YG11, YG12, YH11, YH12, XM11, XM12, YM11, YM12, ZM11, ZM12
+};
+}  // namespace
+
+namespace {
+using Member = double ResistanceScalars::*;
+constexpr Member kMembers[kNumScalars] = {
+    &ResistanceScalars::XA11, &ResistanceScalars::XA12, &ResistanceScalars::YA11,
+    &ResistanceScalars::YA12, &ResistanceScalars::YB11, &ResistanceScalars::YB12,
+    &ResistanceScalars::XC11, &ResistanceScalars::XC12, &ResistanceScalars::YC11,
+    &ResistanceScalars::YC12, &ResistanceScalars::XG11, &ResistanceScalars::XG12,
+    &ResistanceScalars::YG11, &ResistanceScalars::YG12, &ResistanceScalars::YH11,
+    &ResistanceScalars::YH12, &ResistanceScalars::XM11, &ResistanceScalars::XM12,
+    &ResistanceScalars::YM11, &ResistanceScalars::YM12, &ResistanceScalars::ZM11,
+    &ResistanceScalars::ZM12};
+}  // namespace
+
+double& scalar_at(ResistanceScalars& r, int i) {
+  if (i < 0 || i >= kNumScalars) throw std::out_of_range("scalar_at");
+  return r.*kMembers[i];
+}
+double scalar_at(const ResistanceScalars& r, int i) {
+  if (i < 0 || i >= kNumScalars) throw std::out_of_range("scalar_at");
+  return r.*kMembers[i];
+}
+const char* scalar_name(int i) { return kNames[i]; }
+
+ResistanceScalars relabel_spheres(const ResistanceScalars& r) {
+  ResistanceScalars o = r;
+  o.YB11 = -r.YB11;
+  o.YB12 = -r.YB12;
+  o.XG11 = -r.XG11;
+  o.XG12 = -r.XG12;
+  o.YG11 = -r.YG11;
+  o.YG12 = -r.YG12;
+  return o;
+}
+
+ResistanceSeries::ResistanceSeries(double lambda) : lambda_(lambda) {
+  if (!(lambda > 0.0) || !std::isfinite(lambda))
+    throw std::invalid_argument("ResistanceSeries: lambda must be positive");
+  const Coefficients& co = coefficients();
+  const double l = lambda, l2 = l * l, l3 = l2 * l, l4 = l3 * l, l5 = l4 * l;
+  const double p1 = 1.0 + l, p2 = p1 * p1, p3 = p2 * p1;
+  const int K = kSeriesOrder;
+
+  // Lubrication coefficients of the natural-scale sums (JO84, J92, Townsend 2023).
+  const G3 xa{2 * l2 / p3, l * (1 + 7 * l + l2) / (5 * p3),
+              (1 + 18 * l - 29 * l2 + 18 * l3 + l4) / (42 * p3)};
+  const G3 ya{0, 4 * l * (2 + l + 2 * l2) / (15 * p3),
+              2 * (16 - 45 * l + 58 * l2 - 45 * l3 + 16 * l4) / (375 * p3)};
+  const G3 yb{0, -l * (4 + l) / (5 * p2), -(32 - 33 * l + 83 * l2 + 43 * l3) / (250 * p2)};
+  const G3 yc11{0, 2 * l / (5 * p1), (8 + 6 * l + 33 * l2) / (125 * p1)};
+  const G3 yc12{0, l2 / (10 * p1), l * (43 - 24 * l + 43 * l2) / (500 * p1)};
+  const G3 xg{3 * l2 / p3, 3 * (l + 12 * l2 - 4 * l3) / (10 * p3),
+              (5 + 181 * l - 453 * l2 + 566 * l3 - 65 * l4) / (140 * p3)};
+  const G3 yg{0, (4 * l - l2 + 7 * l3) / (10 * p3),
+              (32 - 179 * l + 532 * l2 - 356 * l3 + 221 * l4) / (500 * p3)};
+  const G3 yh11{0, (2 * l - l2) / (10 * p2), (16 - 61 * l + 180 * l2 + 2 * l3) / (500 * p2)};
+  const G3 yh12{0, (l2 + 7 * l3) / (20 * p2), (43 * l + 147 * l2 - 185 * l3 + 221 * l4) / (1000 * p2)};
+  const G3 xm11{6 * l2 / (5 * p3), 3 * (l + 17 * l2 - 9 * l3) / (25 * p3),
+                (5 + 272 * l - 831 * l2 + 1322 * l3 - 415 * l4) / (350 * p3)};
+  const G3 xm12{6 * l3 / (5 * p3), 3 * (-4 * l2 + 17 * l3 - 4 * l4) / (25 * p3),
+                (-65 * l + 832 * l2 - 1041 * l3 + 832 * l4 - 65 * l5) / (350 * p3)};
+  const G3 ym11{0, 6 * (l - l2 + 4 * l3) / (25 * p3),
+                (24 - 201 * l + 882 * l2 - 1182 * l3 + 591 * l4) / (625 * p3)};
+  const G3 ym12{0, 3 * (7 * l2 - 10 * l3 + 7 * l4) / (50 * p3),
+                3 * l * (221 - 728 * l + 1902 * l2 - 728 * l3 + 221 * l4) / (2500 * p3)};
+  const G3 zm{0, 0, -3 * (l2 + l4) / (10 * p3)};
+
+  struct Spec {
+    Coefficients::Id arr;
+    double pref;        // multiplies the sum over q
+    bool lam_parity;    // extra lambda^(k mod 2)
+    int parity11;       // parity of the self series; the cross series has the other one
+    G3 g11, g12;
+    double sigma12;     // sign of the natural cross function
+    int m;              // cross normalisation (2/(1+lambda))^m
+    int slot11;
+  };
+  const Spec specs[] = {
+      {Coefficients::XA_P1, 1.0, false, 0, xa, xa, -1.0, 1, XA11},
+      {Coefficients::YA_P1, 1.0, false, 0, ya, ya, -1.0, 1, YA11},
+      {Coefficients::YA_Q1, 2.0, false, 1, yb, yb, -1.0, 2, YB11},
+      {Coefficients::YC_Q1, 1.0, true, 0, yc11, yc12, 1.0, 3, YC11},
+      {Coefficients::XA_P2, 0.75, false, 1, xg, xg, -1.0, 2, XG11},
+      {Coefficients::YA_P2, 0.75, false, 1, yg, yg, -1.0, 2, YG11},
+      {Coefficients::YC_P2, -0.375, true, 0, yh11, yh12, 1.0, 3, YH11},
+      {Coefficients::XM_P2, 1.0, true, 0, xm11, xm12, 1.0, 3, XM11},
+      {Coefficients::YM_P2, 1.0, true, 0, ym11, ym12, 1.0, 3, YM11},
+      {Coefficients::ZM_P2, 1.0, true, 0, zm, zm, -1.0, 3, ZM11},
+  };
+
+  // x^q y^(k-q) with x = lambda/(1+lambda), y = 1/(1+lambda): lambda^q / (1+lambda)^k.
+  const double x = l / p1, y = 1.0 / p1;
+  std::vector<double> xp(K + 1), yp(K + 1);
+  xp[0] = yp[0] = 1.0;
+  for (int k = 1; k <= K; ++k) {
+    xp[k] = xp[k - 1] * x;
+    yp[k] = yp[k - 1] * y;
+  }
+
+  for (const Spec& sp : specs) {
+    const auto& a = co.a[sp.arr];
+    std::vector<double> c(K + 1, 0.0);
+    for (int k = 0; k <= K; ++k) {
+      double acc = 0.0;
+      for (int q = 0; q <= k; ++q) acc += a[k][q] * xp[q] * yp[k - q];
+      c[k] = sp.pref * acc * ((sp.lam_parity && (k % 2)) ? l : 1.0);
+    }
+    for (int which = 0; which < 2; ++which) {
+      Function& f = fn_[sp.slot11 + which];
+      f.parity = which == 0 ? sp.parity11 : 1 - sp.parity11;
+      const G3 g = which == 0 ? sp.g11 : sp.g12;
+      f.g1 = g.g1;
+      f.g2 = g.g2;
+      f.g3 = g.g3;
+      f.factor = which == 0 ? 1.0 : sp.sigma12 * std::pow(2.0 / p1, sp.m);
+      f.c.assign(K + 1, 0.0);
+      f.r.assign(K + 1, 0.0);
+      for (int k = 0; k <= K; ++k) {
+        if (k % 2 != f.parity) continue;
+        f.c[k] = c[k];
+        f.r[k] = k == 0 ? c[k] : c[k] - (f.g1 + 2.0 * f.g2 / k - 4.0 * f.g3 / (k * (k + 2.0)));
+      }
+      // Near-contact constant: limit t -> 1 of the resummed form minus the singular terms.
+      double rsum = 0.0;
+      for (int k = K; k >= 0; --k) rsum += f.r[k];
+      NearContactForm& nc = near_[sp.slot11 + which];
+      const double A = f.parity == 0 ? rsum - f.g1 / 4.0 - f.g3
+                                     : rsum + f.g1 / 4.0 + 2.0 * f.g2 * kLn2 - 2.0 * f.g3;
+      nc.g1 = f.factor * f.g1;
+      nc.g2 = f.factor * f.g2;
+      nc.g3 = f.factor * f.g3;
+      nc.constant = f.factor * A;
+    }
+  }
+
+  // X^C near contact: exact contact values (Hurwitz zeta) and the xi ln(1/xi) slope.
+  {
+    const double z = hurwitz_zeta3(x);
+    const double zeta3 = 1.2020569031595942854;
+    NearContactForm& n11 = near_[XC11];
+    n11.constant = x * x * x * z;
+    n11.g3 = -l2 / (4 * p1);
+    NearContactForm& n12 = near_[XC12];
+    const double f12 = std::pow(2.0 / p1, 3);
+    n12.constant = -f12 * x * x * x * zeta3;
+    n12.g3 = f12 * l2 / (4 * p1);
+  }
+}
+
+double ResistanceSeries::series_value(const Function& f, double xi, bool resum) const {
+  const double s = 2.0 + xi;
+  const double t = 2.0 / s;
+  const int K = kSeriesOrder;
+  // Horner in t^2 over the entries of the right parity.
+  const double t2 = t * t;
+  const std::vector<double>& a = resum ? f.r : f.c;
+  double acc = 0.0;
+  int top = K;
+  if (top % 2 != f.parity) --top;
+  for (int k = top; k >= 0; k -= 2) acc = acc * t2 + a[k];
+  if (f.parity == 1) acc *= t;
+  if (resum) {
+    const double omt2 = xi * (4.0 + xi) / (s * s);
+    const SingularSums S = singular_sums(f.parity, t, omt2);
+    acc += f.g1 * S.S1 + f.g2 * S.S2 - f.g3 * S.S3;
+  }
+  return f.factor * acc;
+}
+
+void ResistanceSeries::xc_values(double xi, double& xc11, double& xc12) const {
+  const double a1 = 1.0, a2 = lambda_;
+  const double r = (2.0 + xi) * (a1 + a2) / 2.0;
+  const double h = xi * (a1 + a2) / 2.0;  // r - a1 - a2
+  const double alpha = acosh1p(h * (r - a1 + a2) / (2.0 * r * a1));
+  const double beta = acosh1p(h * (r + a1 - a2) / (2.0 * r * a2));
+  const double sa = std::sinh(alpha);
+  const double c = a1 * sa;
+  xc11 = sa * sa * sa * sum_csch3(alpha, alpha + beta);
+  xc12 = -8.0 * c * c * c * sum_csch3(alpha + beta, alpha + beta) / std::pow(a1 + a2, 3);
+}
+
+ResistanceScalars ResistanceSeries::at_gap(double xi) const {
+  if (!(xi > 0.0)) throw std::invalid_argument("resistance functions need xi = s - 2 > 0");
+  const bool resum = (2.0 + xi) < kSwitchS;
+  ResistanceScalars out{};
+  for (int i = 0; i < kNumScalars; ++i) {
+    if (i == XC11 || i == XC12) continue;
+    scalar_at(out, i) = series_value(fn_[i], xi, resum);
+  }
+  xc_values(xi, out.XC11, out.XC12);
+  return out;
+}
+
+ResistanceScalars ResistanceSeries::far_field_series(double s) const {
+  ResistanceScalars out{};
+  for (int i = 0; i < kNumScalars; ++i) {
+    if (i == XC11 || i == XC12) continue;
+    scalar_at(out, i) = series_value(fn_[i], s - 2.0, false);
+  }
+  xc_values(s - 2.0, out.XC11, out.XC12);
+  return out;
+}
+
+ResistanceScalars ResistanceSeries::near_contact_at_gap(double xi) const {
+  ResistanceScalars out{};
+  for (int i = 0; i < kNumScalars; ++i) scalar_at(out, i) = near_[i](xi);
+  return out;
+}
+
+ResistanceScalars resistance_scalars(double s, double lambda) {
+  thread_local std::unique_ptr<ResistanceSeries> cache;
+  if (!cache || cache->lambda() != lambda) cache = std::make_unique<ResistanceSeries>(lambda);
+  return cache->at_s(s);
+}
+
+ResistanceScalars resistance_scalars_22_21(double s, double lambda) {
+  return relabel_spheres(resistance_scalars(s, 1.0 / lambda));
+}
+
+}  // namespace stokesian::lubrication

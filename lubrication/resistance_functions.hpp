@@ -1,0 +1,137 @@
+#pragma once
+// Two-sphere resistance functions for unequal rigid spheres in Stokes flow.
+//
+// Mathematics (see docs/lubrication.md for the full statement and accuracy table):
+//  * Jeffrey & Onishi 1984, J. Fluid Mech. 139, 261 (JO84): X^A, Y^A, Y^B, X^C, Y^C.
+//  * Jeffrey 1992, Phys. Fluids A 4, 16 (J92): X^G, Y^G, Y^H, X^M, Y^M, Z^M.
+//  * Corrections of Townsend, arXiv:1802.08226 (v4, 2023) to the recurrences and the
+//    near-contact coefficients of JO84/J92.
+//
+// Geometry: sphere 1 (radius a1) at x1, sphere 2 (radius a2) at x2, r = |x2 - x1|,
+// d = (x2 - x1)/r (unit vector FROM sphere 1 TO sphere 2), lambda = a2/a1,
+// s = 2r/(a1 + a2) (> 2), gap xi = s - 2.
+//
+// Convention (JO84 eq. 1.1-1.6, J92 eq. 1-8): particles exert (F, T, S) on the fluid and
+//   (F_a, T_a, S_a) = mu * sum_b [ A_ab  Bt_ab  Gt_ab ] (U_b - U_inf(x_b), Omega_b - Omega_inf, -E_inf)
+//                            [ B_ab  C_ab   Ht_ab ]
+//                            [ G_ab  H_ab   M_ab  ]
+// with, for each ordered pair (a, b) in {1,2}^2,
+//   A_ij   = X^A (d_i d_j) + Y^A (delta_ij - d_i d_j)
+//   B_ij   = Y^B eps_ijk d_k
+//   C_ij   = X^C (d_i d_j) + Y^C (delta_ij - d_i d_j)
+//   G_ijk  = X^G (d_i d_j - delta_ij/3) d_k + Y^G (d_i delta_jk + d_j delta_ik - 2 d_i d_j d_k)
+//   H_ijk  = Y^H (eps_ikl d_l d_j + eps_jkl d_l d_i)
+//   M_ijkl = X^M d^(0)_ijkl + Y^M d^(1)_ijkl + Z^M d^(2)_ijkl     (J92 eq. 8; see docs)
+// and Bt_ab = B_ba^T, Gt_ab = G_ba^T, Ht_ab = H_ba^T (reciprocal theorem).
+//
+// Normalisation (JO84 eq. 1.6 / J92 eq. 9): the dimensional function is the dimensionless one
+// returned here times
+//   X^A, Y^A            : 3 pi mu (a_a + a_b)
+//   Y^B                 : pi mu (a_a + a_b)^2
+//   X^C, Y^C            : pi mu (a_a + a_b)^3
+//   X^G, Y^G            : pi mu (a_a + a_b)^2
+//   Y^H                 : pi mu (a_a + a_b)^3
+//   X^M, Y^M, Z^M       : (5/6) pi mu (a_a + a_b)^3
+// e.g. F_1 = 3 pi mu (a1+a2) [X^A_12 d d + Y^A_12 (I - d d)] . U_2 for sphere 2 moving alone,
+// and F_1 = 6 pi mu a1 [X^A_11 dd + Y^A_11 (I - dd)] . U_1 for sphere 1 moving alone.
+// Isolated spheres: X^A_11 = Y^A_11 = X^C_11 = Y^C_11 = X^M_11 = Y^M_11 = Z^M_11 = 1, others 0.
+//
+// Sphere relabelling (1 <-> 2 is lambda -> 1/lambda and d -> -d):
+//   F_22(s, lambda) =  F_11(s, 1/lambda),  F_21(s, lambda) =  F_12(s, 1/lambda)
+// for F in {X^A, Y^A, X^C, Y^C, Y^H, X^M, Y^M, Z^M} (tensor forms even in d), and with a minus
+// sign for F in {Y^B, X^G, Y^G} (tensor forms odd in d).  relabel_spheres() applies this.
+
+#include <array>
+#include <vector>
+
+namespace stokesian::lubrication {
+
+/// The 22 dimensionless scalars of the ordered pair (1,2): "11" = self term of sphere 1,
+/// "12" = effect on sphere 1 of the motion of sphere 2 (JO84/J92 normalisation, see above).
+struct ResistanceScalars {
+  double XA11, XA12, YA11, YA12, YB11, YB12, XC11, XC12, YC11, YC12, XG11, XG12, YG11, YG12,
+      YH11, YH12, XM11, XM12, YM11, YM12, ZM11, ZM12;
+};
+
+/// Number of scalars in ResistanceScalars and access by index (order of the members above).
+inline constexpr int kNumScalars = 22;
+double& scalar_at(ResistanceScalars& r, int i);
+double scalar_at(const ResistanceScalars& r, int i);
+/// Name of scalar i, e.g. "XA11".
+const char* scalar_name(int i);
+
+/// Relabel the spheres: given the scalars evaluated at (s, 1/lambda), return the scalars with
+/// indices 22 (stored in the "11" members) and 21 (stored in the "12" members) at (s, lambda).
+ResistanceScalars relabel_spheres(const ResistanceScalars& at_inverse_lambda);
+
+/// Near-contact form F ~ g1/xi + g2 ln(1/xi) + constant + g3 xi ln(1/xi) of one function
+/// (JO84 eq. 3.17 etc.), in the same normalisation as ResistanceScalars.
+struct NearContactForm {
+  double g1 = 0, g2 = 0, g3 = 0, constant = 0;
+  double operator()(double xi) const;
+};
+
+/// Order (highest power of 1/s) of the twin-multipole series.
+#ifndef STOKESIAN_LUB_SERIES_ORDER
+#define STOKESIAN_LUB_SERIES_ORDER 200
+#endif
+inline constexpr int kSeriesOrder = STOKESIAN_LUB_SERIES_ORDER;
+
+/// All resistance functions for one size ratio lambda = a2/a1 (0 < lambda; tested for
+/// 0.01 <= lambda <= 100).  Construction costs ~1 ms once the lambda-independent recurrence
+/// coefficients exist; these are computed on first use (~1 s) and shared by all instances.
+class ResistanceSeries {
+ public:
+  explicit ResistanceSeries(double lambda);
+
+  double lambda() const { return lambda_; }
+
+  /// All 22 scalars at gap xi = s - 2 > 0 (use this form near contact to avoid losing digits
+  /// of xi in s).
+  ResistanceScalars at_gap(double xi) const;
+  /// All 22 scalars at s = 2r/(a1+a2) > 2.
+  ResistanceScalars at_s(double s) const { return at_gap(s - 2.0); }
+
+  /// Pure near-contact forms (asymptotic, JO84/J92), constants computed from our series.
+  const std::array<NearContactForm, kNumScalars>& near_contact() const { return near_; }
+  ResistanceScalars near_contact_at_gap(double xi) const;
+
+  /// Plain truncated far-field power series in 1/s (no near-contact resummation); valid and
+  /// converged for s >= about 2.5.  X^C uses the exact bispherical sum in both paths.
+  ResistanceScalars far_field_series(double s) const;
+
+  /// Separation s above which at_gap() uses the plain series (the regimes agree to ~1e-14).
+  static constexpr double kSwitchS = 3.0;
+
+  /// Series coefficient c_k (natural normalisation, see docs) of function i (0..21).
+  double coefficient(int i, int k) const { return fn_[i].c.empty() ? 0.0 : fn_[i].c[k]; }
+  /// Remainder c_k - a_k after subtracting the near-contact asymptotic part.
+  double remainder(int i, int k) const { return fn_[i].r.empty() ? 0.0 : fn_[i].r[k]; }
+
+ private:
+  struct Function {
+    std::vector<double> c;  // c_k, k = 0..kSeriesOrder (zero for the wrong parity)
+    std::vector<double> r;  // c_k - asymptotic part a_k
+    int parity = 0;         // 0: even powers, 1: odd powers
+    double g1 = 0, g2 = 0, g3 = 0;  // asymptotic a_k = g1 + 2 g2/k - 4 g3/(k(k+2))
+    double factor = 1;      // sign and normalisation (2/(1+lambda))^m
+  };
+  double series_value(const Function& f, double xi, bool resum) const;
+  void xc_values(double xi, double& xc11, double& xc12) const;
+
+  double lambda_;
+  std::array<Function, kNumScalars> fn_{};  // XC entries unused
+  std::array<NearContactForm, kNumScalars> near_{};
+};
+
+/// Convenience: scalars of the ordered pair (1,2) at (s, lambda).  Rebuilds a
+/// ResistanceSeries unless lambda equals the previous call's (per thread); for many pairs use
+/// ResistanceSeries or ResistanceTable directly.
+ResistanceScalars resistance_scalars(double s, double lambda);
+/// Scalars 22 (in the "11" members) and 21 (in the "12" members) at (s, lambda).
+ResistanceScalars resistance_scalars_22_21(double s, double lambda);
+
+/// Hurwitz zeta(3, a) for a > 0 (used for the X^C contact values).
+double hurwitz_zeta3(double a);
+
+}  // namespace stokesian::lubrication
