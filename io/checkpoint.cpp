@@ -1,0 +1,222 @@
+#include "io/checkpoint.hpp"
+
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+namespace stokesian::io {
+namespace {
+
+constexpr char kMagic[8] = {'S', 'T', 'K', 'C', 'K', 'P', 'T', '1'};
+
+std::uint64_t fnv1a64(const std::string& bytes) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (unsigned char c : bytes) {
+    h ^= c;
+    h *= 1099511628211ull;
+  }
+  return h;
+}
+
+// Little-endian encoder/decoder, independent of the host byte order.
+struct Writer {
+  std::string out;
+  void u64(std::uint64_t v) {
+    for (int i = 0; i < 8; ++i) out.push_back(static_cast<char>((v >> (8 * i)) & 0xff));
+  }
+  void i64(std::int64_t v) { u64(static_cast<std::uint64_t>(v)); }
+  void f64(double v) {
+    std::uint64_t b;
+    std::memcpy(&b, &v, 8);
+    u64(b);
+  }
+  void str(const std::string& s) {
+    u64(s.size());
+    out += s;
+  }
+};
+
+struct Reader {
+  const std::string& in;
+  std::size_t pos = 0;
+  std::string file;
+  void need(std::size_t n) const {
+    if (in.size() - pos < n) throw IoError(file + ": checkpoint payload ends early (corrupt)");
+  }
+  std::uint64_t u64() {
+    need(8);
+    std::uint64_t v = 0;
+    for (int i = 0; i < 8; ++i) v |= static_cast<std::uint64_t>(static_cast<unsigned char>(in[pos + i])) << (8 * i);
+    pos += 8;
+    return v;
+  }
+  std::int64_t i64() { return static_cast<std::int64_t>(u64()); }
+  double f64() {
+    const std::uint64_t b = u64();
+    double v;
+    std::memcpy(&v, &b, 8);
+    return v;
+  }
+  std::string str() {
+    const std::uint64_t n = u64();
+    need(n);
+    std::string s = in.substr(pos, n);
+    pos += n;
+    return s;
+  }
+  std::size_t count(std::size_t bytes_each) {
+    const std::uint64_t n = u64();
+    if (bytes_each && n > (in.size() - pos) / bytes_each) throw IoError(file + ": checkpoint count out of range (corrupt)");
+    return n;
+  }
+};
+
+constexpr std::uint64_t kFormatVersion = 1;
+
+}  // namespace
+
+void write_checkpoint(const std::string& path, const Checkpoint& c) {
+  const State& s = c.state;
+  if (s.radius.size() != s.size() || s.fixed.size() != s.size())
+    throw IoError(path + ": state has inconsistent sizes (positions, radii, fixed flags)");
+  Writer w;
+  w.u64(kFormatVersion);
+  w.i64(s.step);
+  w.f64(s.time);
+  w.f64(s.dt);
+  w.u64(s.domain.kind == Domain::Kind::periodic ? 1 : 0);
+  for (int k = 0; k < 3; ++k) w.f64(s.domain.box[k]);
+  w.f64(s.domain.shear_strain);
+  w.u64(s.size());
+  for (const auto& x : s.position)
+    for (int k = 0; k < 3; ++k) w.f64(x[k]);
+  for (double r : s.radius) w.f64(r);
+  for (char f : s.fixed) w.out.push_back(f ? 1 : 0);
+  w.str(s.rng_state);
+  w.str(c.scene_toml);
+  w.str(c.model);
+  w.i64(c.trajectory_frames);
+  w.u64(c.values.size());
+  for (const auto& [k, v] : c.values) {
+    w.str(k);
+    w.f64(v);
+  }
+  w.u64(c.strings.size());
+  for (const auto& [k, v] : c.strings) {
+    w.str(k);
+    w.str(v);
+  }
+
+  Writer file;
+  file.out.assign(kMagic, 8);
+  file.u64(w.out.size());
+  file.out += w.out;
+  file.u64(fnv1a64(w.out));
+
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream os(tmp, std::ios::binary | std::ios::trunc);
+    if (!os) throw IoError(tmp + ": cannot create checkpoint (" + std::strerror(errno) + ")");
+    os.write(file.out.data(), static_cast<std::streamsize>(file.out.size()));
+    os.close();
+    if (!os) throw IoError(tmp + ": writing the checkpoint failed");
+  }
+  detail::fsync_file(tmp);
+  detail::durable_rename(tmp, path);
+}
+
+Checkpoint read_checkpoint(const std::string& path) {
+  std::ifstream is(path, std::ios::binary);
+  if (!is) throw IoError(path + ": cannot open checkpoint (" + std::strerror(errno) + ")");
+  std::ostringstream ss;
+  ss << is.rdbuf();
+  const std::string bytes = ss.str();
+  if (bytes.size() < 24 || std::memcmp(bytes.data(), kMagic, 8) != 0)
+    throw IoError(path + ": not a stokesian checkpoint (bad header)");
+  Reader head{bytes, 8, path};
+  const std::uint64_t len = head.u64();
+  if (len != bytes.size() - 24) throw IoError(path + ": checkpoint has the wrong length (truncated or corrupt)");
+  const std::string payload = bytes.substr(16, len);
+  Reader tail{bytes, 16 + len, path};
+  if (tail.u64() != fnv1a64(payload)) throw IoError(path + ": checkpoint checksum mismatch (corrupt)");
+
+  Reader r{payload, 0, path};
+  if (r.u64() != kFormatVersion) throw IoError(path + ": unsupported checkpoint format version");
+  Checkpoint c;
+  State& s = c.state;
+  s.step = r.i64();
+  s.time = r.f64();
+  s.dt = r.f64();
+  s.domain.kind = r.u64() ? Domain::Kind::periodic : Domain::Kind::open;
+  for (int k = 0; k < 3; ++k) s.domain.box[k] = r.f64();
+  s.domain.shear_strain = r.f64();
+  const std::size_t n = r.count(3 * 8 + 8 + 1);
+  s.position.resize(n);
+  for (auto& x : s.position)
+    for (int k = 0; k < 3; ++k) x[k] = r.f64();
+  s.radius.resize(n);
+  for (auto& a : s.radius) a = r.f64();
+  r.need(n);
+  s.fixed.assign(payload.begin() + static_cast<std::ptrdiff_t>(r.pos),
+                 payload.begin() + static_cast<std::ptrdiff_t>(r.pos + n));
+  r.pos += n;
+  s.rng_state = r.str();
+  c.scene_toml = r.str();
+  c.model = r.str();
+  c.trajectory_frames = r.i64();
+  for (std::size_t i = 0, m = r.count(16); i < m; ++i) {
+    std::string k = r.str();
+    c.values[k] = r.f64();
+  }
+  for (std::size_t i = 0, m = r.count(16); i < m; ++i) {
+    std::string k = r.str();
+    c.strings[k] = r.str();
+  }
+  if (r.pos != payload.size()) throw IoError(path + ": checkpoint has trailing bytes (corrupt)");
+  return c;
+}
+
+RunOutput RunOutput::start(const std::string& path, const TrajectoryHeader& header) {
+  // Remove the old checkpoint first: a kill between the two steps leaves no checkpoint, never
+  // a checkpoint that points into the new trajectory.
+  detail::remove_if_exists(checkpoint_path(path));
+  detail::remove_if_exists(checkpoint_path(path) + ".tmp");
+  return RunOutput(Trajectory::create(path, header));
+}
+
+RunOutput RunOutput::resume(const std::string& path, const TrajectoryHeader& header, Checkpoint& restored) {
+  const std::string cp = checkpoint_path(path);
+  if (!detail::exists(cp)) throw IoError(cp + ": no checkpoint to resume from");
+  Checkpoint c = read_checkpoint(cp);
+  auto refuse = [&](const std::string& why) { throw IoError(cp + ": cannot resume: " + why); };
+  if (c.state.size() != header.particles)
+    refuse("the checkpoint holds " + std::to_string(c.state.size()) + " particles, the run has " +
+           std::to_string(header.particles));
+  if (c.scene_toml != header.scene_toml) refuse("the scene differs from the one the checkpoint was written with");
+  if (c.model != header.model) refuse("the model differs (checkpoint: \"" + c.model + "\", run: \"" + header.model + "\")");
+  RunOutput out(Trajectory::resume(path, header, c.state.step, c.trajectory_frames));
+  restored = std::move(c);
+  return out;
+}
+
+void RunOutput::checkpoint(const State& state, const std::map<std::string, double>& values,
+                           const std::map<std::string, std::string>& strings) {
+  if (state.size() != traj_.header().particles)
+    throw IoError(checkpoint_file() + ": state has " + std::to_string(state.size()) + " particles, trajectory " +
+                  std::to_string(traj_.header().particles));
+  if (traj_.has_frames() && traj_.last_step() > state.step)
+    throw IoError(checkpoint_file() + ": a frame at step " + std::to_string(traj_.last_step()) +
+                  " lies after the checkpointed state (step " + std::to_string(state.step) + ")");
+  traj_.commit();
+  Checkpoint c;
+  c.state = state;
+  c.values = values;
+  c.strings = strings;
+  c.scene_toml = traj_.header().scene_toml;
+  c.model = traj_.header().model;
+  c.trajectory_frames = traj_.committed_frames();
+  write_checkpoint(checkpoint_file(), c);
+}
+
+}  // namespace stokesian::io

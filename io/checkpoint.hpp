@@ -1,0 +1,58 @@
+#pragma once
+// Kill-safe checkpoints, and RunOutput, which ties them to the trajectory so that a checkpoint
+// is only ever written after the frames it accounts for are committed.
+//
+// Checkpoint file (P + ".ckpt"), little-endian binary:
+//   "STKCKPT1" | u64 payload length | payload | u64 FNV-1a-64 checksum of the payload
+// Doubles are stored as their IEEE-754 bit patterns, so a round trip is bit-exact. The file is
+// written to P.ckpt.tmp, fsync'ed, then renamed over P.ckpt: a reader sees the old or the new
+// checkpoint, never a mixture; a damaged file fails the length or checksum test.
+//
+// Resume guarantee: after RunOutput::resume the trajectory holds exactly the frames with
+// step <= checkpoint step, and their number equals the count the checkpoint recorded.
+#include "engine/state.hpp"
+#include "io/h5md.hpp"
+
+#include <cstdint>
+#include <map>
+#include <string>
+
+namespace stokesian::io {
+
+struct Checkpoint {
+  State state;                                  // full dynamic state (positions ... rng)
+  std::map<std::string, double> values;         // opaque driver data (accumulators, counters)
+  std::map<std::string, std::string> strings;   // opaque driver data (text)
+  std::string scene_toml;                       // resolved scene the run was started with
+  std::string model;                            // resolved model description
+  std::int64_t trajectory_frames = 0;           // frames committed to the trajectory when written
+};
+
+void write_checkpoint(const std::string& path, const Checkpoint& c);  // atomic replace
+Checkpoint read_checkpoint(const std::string& path);                  // IoError if damaged
+
+inline std::string checkpoint_path(const std::string& trajectory_path) { return trajectory_path + ".ckpt"; }
+
+// The trajectory + checkpoint pair of one run.
+class RunOutput {
+ public:
+  // Fresh run: removes a stale checkpoint, then creates the trajectory with zero frames.
+  static RunOutput start(const std::string& path, const TrajectoryHeader& header);
+  // Continue from path.ckpt: returns the restored checkpoint through `restored`. Refuses
+  // (IoError) when checkpoint, trajectory and header disagree (N, scene, model, frame count).
+  static RunOutput resume(const std::string& path, const TrajectoryHeader& header, Checkpoint& restored);
+
+  void record(Frame frame) { traj_.append(std::move(frame)); }
+  // Commit buffered frames, then write the checkpoint of `state` (in that order).
+  void checkpoint(const State& state, const std::map<std::string, double>& values = {},
+                  const std::map<std::string, std::string>& strings = {});
+
+  Trajectory& trajectory() { return traj_; }
+  std::string checkpoint_file() const { return checkpoint_path(traj_.path()); }
+
+ private:
+  explicit RunOutput(Trajectory t) : traj_(std::move(t)) {}
+  Trajectory traj_;
+};
+
+}  // namespace stokesian::io

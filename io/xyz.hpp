@@ -1,0 +1,55 @@
+#pragma once
+// Extended XYZ (the ASE/OVITO convention): per frame
+//   N
+//   Lattice="ax ay az bx by bz cx cy cz" pbc="T T T" Properties=species:S:1:pos:R:3:radius:R:1 Time=t Step=s
+//   P x y z a          (N lines)
+// Lattice (rows = cell vectors) is written for periodic boxes only; with Lees-Edwards strain g the
+// second vector is (g Ly, Ly, 0). Numbers are printed with 17 significant digits, so reading a
+// file back reproduces the doubles exactly.
+#include "engine/state.hpp"
+#include "io/h5md.hpp"
+
+#include <cstdint>
+#include <fstream>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace stokesian::io {
+
+struct XyzFrame {
+  std::vector<Vec3> position;
+  std::vector<double> radius;          // empty if the file has no radius column
+  std::vector<std::string> species;    // empty if the file has no species column
+  std::optional<Mat3> lattice;         // rows = cell vectors
+  std::optional<double> time;
+  std::optional<std::int64_t> step;
+};
+
+// Every frame of an extended XYZ file. Columns come from Properties= (pos:R:3 required,
+// radius:R:1 and species:S:1 optional); without Properties a line is "species x y z [radius]".
+// Errors name the file and the line.
+std::vector<XyzFrame> read_xyz(const std::string& path);
+
+// Write one frame (position and radius of `f`). species: one label per particle, or empty for "P".
+void write_xyz_frame(std::ostream& os, const Frame& f, const Domain& domain,
+                     const std::vector<std::string>& species = {});
+
+// Streaming export for a run. On resume, open with `keep_until_step` to drop frames written
+// after the checkpoint (the file is rewritten atomically without them).
+class XyzWriter {
+ public:
+  XyzWriter(std::string path, Domain domain, std::vector<std::string> species = {},
+            std::optional<std::int64_t> keep_until_step = std::nullopt);
+  void write(const Frame& f);
+  void flush();
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+  Domain domain_;
+  std::vector<std::string> species_;
+  std::ofstream os_;
+};
+
+}  // namespace stokesian::io
