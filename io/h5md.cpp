@@ -827,7 +827,12 @@ void Trajectory::append(Frame frame) {
   check_frame(frame);
   last_step_ = frame.step;
   any_step_ = true;
+  std::size_t bytes = 0;
+  for (int i = 0; i < kNumQuantities; ++i)
+    if (recorded(header_.record, i)) bytes += entries_of(frame, i) * 8 * static_cast<std::size_t>(std::max(kQuantities[i].comps, 1));
+  pending_bytes_ += bytes;
   pending_.push_back(std::move(frame));
+  if (pending_bytes_ > max_pending_bytes) commit();
 }
 
 void Trajectory::commit() {
@@ -875,6 +880,7 @@ void Trajectory::commit() {
   committed_ += static_cast<std::int64_t>(pending_.size());
   previous_ = std::move(pending_);
   pending_.clear();
+  pending_bytes_ = 0;
 }
 
 Snapshot read_last_frame(const std::string& path) {

@@ -11,7 +11,7 @@
 //   /parameters/stokesian/{scene,model,version,git,compiler,build_type}
 //
 // Commit protocol (never-corrupt file). Let P be the visible file and S = P + ".shadow", a copy
-// of P that lags exactly one commit behind. append() only buffers frames in memory. commit():
+// of P that lags exactly one commit behind. append() buffers frames in memory. commit():
 //   1. append the previous segment and the pending one to S; close S; fsync S;
 //   2. link(P, P.old); rename(S, P); rename(P.old, S); fsync the directory.
 // rename() is atomic, so at every instant P names a closed file holding a whole number of
@@ -83,8 +83,12 @@ class Trajectory {
   static Trajectory resume(const std::string& path, const TrajectoryHeader& header,
                            std::int64_t last_step, std::int64_t expected_frames);
 
-  void append(Frame frame);  // buffer; steps must increase strictly
-  void commit();             // make every buffered frame visible in the file (protocol above)
+  // Buffer a frame; steps must increase strictly. When the buffer exceeds max_pending_bytes the
+  // frames are committed early (safe: a later resume truncates to the checkpoint anyway), which
+  // bounds memory for runs that checkpoint rarely.
+  void append(Frame frame);
+  void commit();  // make every buffered frame visible in the file (protocol above)
+  std::size_t max_pending_bytes = std::size_t(256) << 20;
 
   const std::string& path() const { return path_; }
   std::string shadow_path() const { return path_ + ".shadow"; }
@@ -101,6 +105,7 @@ class Trajectory {
   std::string path_;
   TrajectoryHeader header_;
   std::vector<Frame> pending_;   // not yet in P
+  std::size_t pending_bytes_ = 0;
   std::vector<Frame> previous_;  // in P but not yet in S
   std::int64_t committed_ = 0;   // frames in P
   std::int64_t last_step_ = 0;

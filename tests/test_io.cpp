@@ -346,6 +346,25 @@ TEST_CASE("commit and resume: the trajectory keeps exactly the frames up to the 
   SUBCASE("steps must increase") { CHECK_THROWS_AS(out.record(make_frame(40, n, h.record)), io::IoError); }
 }
 
+TEST_CASE("a full frame buffer is committed early; resume still truncates to the checkpoint") {
+  TempDir tmp;
+  const std::string path = tmp / "big.h5";
+  const std::size_t n = 10;
+  const auto h = make_header(n, false);
+  auto out = io::RunOutput::start(path, h);
+  // One frame: 10 x (5 x 3 + 6 + 1) doubles = 1760 bytes; a 4000-byte budget commits every 3rd.
+  out.trajectory().max_pending_bytes = 4000;
+  out.record(make_frame(1, n, h.record));
+  out.checkpoint(make_state(n, 1));
+  for (std::int64_t s = 2; s <= 7; ++s) out.record(make_frame(s, n, h.record));
+  CHECK(out.trajectory().committed_frames() == 7);
+  CHECK(out.trajectory().pending_frames() == 0);
+  CHECK(verify_frames(path, n).size() == 7);
+  io::Checkpoint ck;
+  io::RunOutput::resume(path, h, ck);
+  CHECK(verify_frames(path, n) == std::vector<std::int64_t>{1});
+}
+
 TEST_CASE("resume repairs a missing or damaged shadow and refuses inconsistent inputs") {
   TempDir tmp;
   const std::string path = tmp / "run.h5";
