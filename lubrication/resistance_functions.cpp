@@ -29,9 +29,14 @@
 //       T_1 = 8 pi mu c^3 Omega_1 sum_{n>=0} csch^3((n+1) alpha + n beta),
 //       T_2 = -8 pi mu c^3 Omega_1 sum_{n>=1} csch^3(n (alpha + beta)),
 //    c = a1 sinh(alpha) = a2 sinh(beta); tails summed by Euler-Maclaurin.  Its contact limit
-//    is the Hurwitz-zeta form of JO84 eq. 6.? / Townsend eqs. 26-27.
+//    is the Hurwitz-zeta form of Townsend eqs. 26-27.
+// 5. Pair matrix: tensor forms of JO84 eq. (1.x) and J92 (A, B, C, G, H, M blocks; M basis
+//    d0 = 3/2 (dd - I/3)(dd - I/3), d1, d2 as in J92 / Kim & Karrila 1991 ch. 11), projected
+//    on the orthonormal symmetric-traceless basis of engine/sym_traceless.hpp.
 
 #include "lubrication/resistance_functions.hpp"
+
+#include "engine/sym_traceless.hpp"
 
 #include <cmath>
 #include <algorithm>
@@ -554,6 +559,124 @@ ResistanceScalars ResistanceSeries::near_contact_at_gap(double xi) const {
   ResistanceScalars out{};
   for (int i = 0; i < kNumScalars; ++i) scalar_at(out, i) = near_[i](xi);
   return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+namespace {
+
+double levi(int i, int j, int k) { return 0.5 * (i - j) * (j - k) * (k - i); }
+
+// Scalars of the ordered pair (a, b) with a, b in {0, 1}.
+struct PairScalars {
+  double XA, YA, YB, XC, YC, XG, YG, YH, XM, YM, ZM;
+};
+PairScalars pick(const ResistanceScalars& r, bool cross) {
+  if (!cross)
+    return {r.XA11, r.YA11, r.YB11, r.XC11, r.YC11, r.XG11, r.YG11, r.YH11, r.XM11, r.YM11, r.ZM11};
+  return {r.XA12, r.YA12, r.YB12, r.XC12, r.YC12, r.XG12, r.YG12, r.YH12, r.XM12, r.YM12, r.ZM12};
+}
+
+}  // namespace
+
+PairMatrix two_sphere_resistance(const Eigen::Vector3d& r_vec, double a1, double a2, double mu,
+                                 const ResistanceScalars& s11_12,
+                                 const ResistanceScalars& s22_21) {
+  const double r = r_vec.norm();
+  const Eigen::Vector3d d = r_vec / r;
+  const double pi = 3.14159265358979323846;
+  const double rad[2] = {a1, a2};
+  auto dl = [](int i, int j) { return i == j ? 1.0 : 0.0; };
+  // Basis of symmetric traceless tensors.
+  Mat3 basis[5];
+  for (int m = 0; m < 5; ++m) basis[m] = from_vec5(Vec5::Unit(m));
+
+  // Tensors of the ordered pair (a, b) acting as in the class comment.
+  struct Blocks {
+    Mat3 A, B, C;
+    double G[3][3][3], H[3][3][3], M[3][3][3][3];
+  };
+  auto blocks = [&](int a, int b) {
+    const PairScalars p = a == 0 ? pick(s11_12, b == 1) : pick(s22_21, b == 0);
+    const double L = rad[a] + rad[b];
+    const double nA = 3 * pi * mu * L, nB = pi * mu * L * L, nC = pi * mu * L * L * L;
+    const double nG = nB, nH = nC, nM = 5.0 / 6.0 * pi * mu * L * L * L;
+    Blocks k{};
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) {
+        const double dd = d[i] * d[j];
+        k.A(i, j) = nA * (p.XA * dd + p.YA * (dl(i, j) - dd));
+        k.C(i, j) = nC * (p.XC * dd + p.YC * (dl(i, j) - dd));
+        double e = 0.0;
+        for (int l = 0; l < 3; ++l) e += levi(i, j, l) * d[l];
+        k.B(i, j) = nB * p.YB * e;
+        for (int l = 0; l < 3; ++l) {
+          k.G[i][j][l] = nG * (p.XG * (dd - dl(i, j) / 3.0) * d[l] +
+                               p.YG * (d[i] * dl(j, l) + d[j] * dl(i, l) - 2 * dd * d[l]));
+          double h = 0.0;
+          for (int q = 0; q < 3; ++q) h += levi(i, l, q) * d[q] * d[j] + levi(j, l, q) * d[q] * d[i];
+          k.H[i][j][l] = nH * p.YH * h;
+          for (int m = 0; m < 3; ++m) {
+            const double d0 = 1.5 * (dd - dl(i, j) / 3.0) * (d[l] * d[m] - dl(l, m) / 3.0);
+            const double d1 = 0.5 * (d[i] * dl(j, m) * d[l] + d[j] * dl(i, m) * d[l] +
+                                     d[i] * dl(j, l) * d[m] + d[j] * dl(i, l) * d[m] -
+                                     4 * dd * d[l] * d[m]);
+            const double d2 =
+                0.5 * (dl(i, l) * dl(j, m) + dl(j, l) * dl(i, m) - dl(i, j) * dl(l, m) +
+                       dd * dl(l, m) + dl(i, j) * d[l] * d[m] - d[i] * dl(j, m) * d[l] -
+                       d[j] * dl(i, m) * d[l] - d[i] * dl(j, l) * d[m] - d[j] * dl(i, l) * d[m] +
+                       dd * d[l] * d[m]);
+            k.M[i][j][l][m] = nM * (p.XM * d0 + p.YM * d1 + p.ZM * d2);
+          }
+        }
+      }
+    return k;
+  };
+
+  PairMatrix R = PairMatrix::Zero();
+  for (int a = 0; a < 2; ++a)
+    for (int b = 0; b < 2; ++b) {
+      const Blocks k = blocks(a, b);   // (a, b)
+      const Blocks kt = blocks(b, a);  // (b, a), for the transposed couplings
+      const int ro = 11 * a, co = 11 * b;
+      R.block<3, 3>(ro, co) = k.A;
+      R.block<3, 3>(ro, co + 3) = kt.B.transpose();  // Bt_ab = B_ba^T
+      R.block<3, 3>(ro + 3, co) = k.B;
+      R.block<3, 3>(ro + 3, co + 3) = k.C;
+      for (int m = 0; m < 5; ++m) {
+        const Mat3& Bm = basis[m];
+        for (int l = 0; l < 3; ++l) {
+          double g = 0.0, h = 0.0, gt = 0.0, ht = 0.0;
+          for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) {
+              g += Bm(i, j) * k.G[i][j][l];
+              h += Bm(i, j) * k.H[i][j][l];
+              gt += Bm(i, j) * kt.G[i][j][l];
+              ht += Bm(i, j) * kt.H[i][j][l];
+            }
+          R(ro + 6 + m, co + l) = g;       // S_a from U_b
+          R(ro + 6 + m, co + 3 + l) = h;   // S_a from Omega_b
+          R(ro + l, co + 6 + m) = gt;      // F_a from E_b: Gt_ab = G_ba^T
+          R(ro + 3 + l, co + 6 + m) = ht;  // T_a from E_b: Ht_ab = H_ba^T
+        }
+        for (int n = 0; n < 5; ++n) {
+          const Mat3& Bn = basis[n];
+          double acc = 0.0;
+          for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j)
+              for (int l = 0; l < 3; ++l)
+                for (int q = 0; q < 3; ++q) acc += Bm(i, j) * k.M[i][j][l][q] * Bn(l, q);
+          R(ro + 6 + m, co + 6 + n) = acc;
+        }
+      }
+    }
+  return R;
+}
+
+PairMatrix two_sphere_resistance(const Eigen::Vector3d& r_vec, double a1, double a2, double mu) {
+  const double s = 2.0 * r_vec.norm() / (a1 + a2);
+  const ResistanceSeries first(a2 / a1), second(a1 / a2);
+  return two_sphere_resistance(r_vec, a1, a2, mu, first.at_s(s),
+                               relabel_spheres(second.at_s(s)));
 }
 
 ResistanceScalars resistance_scalars(double s, double lambda) {

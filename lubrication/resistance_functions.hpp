@@ -41,6 +41,8 @@
 // for F in {X^A, Y^A, X^C, Y^C, Y^H, X^M, Y^M, Z^M} (tensor forms even in d), and with a minus
 // sign for F in {Y^B, X^G, Y^G} (tensor forms odd in d).  relabel_spheres() applies this.
 
+#include <Eigen/Dense>
+
 #include <array>
 #include <vector>
 
@@ -130,6 +132,22 @@ class ResistanceSeries {
 ResistanceScalars resistance_scalars(double s, double lambda);
 /// Scalars 22 (in the "11" members) and 21 (in the "12" members) at (s, lambda).
 ResistanceScalars resistance_scalars_22_21(double s, double lambda);
+
+/// Dense FTS resistance matrix of an isolated pair, 22 x 22, in the engine's interleaved layout
+/// [F1(3) T1(3) S1(5) F2(3) T2(3) S2(5)] = R [U1 Om1 e1 U2 Om2 e2], where U_a, Om_a are the
+/// particle velocities relative to the ambient flow at the particle and e_a are the 5
+/// coordinates of -E_inf in the orthonormal basis of engine/sym_traceless.hpp (so for a
+/// uniform ambient strain both e columns carry the same -E_inf).  F, T, S are exerted by the
+/// particles on the fluid.  Blocks: A, Bt, Gt / B, C, Ht / G, H, M of JO84/J92 with the
+/// normalisations above; R is symmetric and positive definite.
+/// r_vec = x2 - x1 (|r_vec| > a1 + a2), radii a1, a2, viscosity mu.
+using PairMatrix = Eigen::Matrix<double, 22, 22>;
+PairMatrix two_sphere_resistance(const Eigen::Vector3d& r_vec, double a1, double a2, double mu);
+/// Same, from precomputed scalars (e.g. from ResistanceTableCache::pair_scalars):
+/// s11_12 at (s, a2/a1) and s22_21 = relabel_spheres(scalars at (s, a1/a2)).
+PairMatrix two_sphere_resistance(const Eigen::Vector3d& r_vec, double a1, double a2, double mu,
+                                 const ResistanceScalars& s11_12,
+                                 const ResistanceScalars& s22_21);
 
 /// Hurwitz zeta(3, a) for a > 0 (used for the X^C contact values).
 double hurwitz_zeta3(double a);

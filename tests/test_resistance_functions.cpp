@@ -334,3 +334,106 @@ TEST_CASE("table interpolation error <= 1e-6 at off-grid points") {
     CHECK(worst < 1e-6);
   }
 }
+
+// ---------------------------------------------------------------------------------------------
+// Pair matrix.
+
+namespace {
+
+PairMatrix pair_matrix(double xi, double a1, double a2, const Eigen::Vector3d& dir) {
+  const double r = (2.0 + xi) * (a1 + a2) / 2.0;
+  return two_sphere_resistance(r * dir.normalized(), a1, a2, 1.3);
+}
+
+// Generalised velocity of a rigid-body motion of the pair (no ambient flow).
+Eigen::Matrix<double, 22, 1> rigid_motion(const Eigen::Vector3d& U, const Eigen::Vector3d& Om,
+                                          const Eigen::Vector3d& x1, const Eigen::Vector3d& x2) {
+  Eigen::Matrix<double, 22, 1> v = Eigen::Matrix<double, 22, 1>::Zero();
+  v.segment<3>(0) = U + Om.cross(x1);
+  v.segment<3>(3) = Om;
+  v.segment<3>(11) = U + Om.cross(x2);
+  v.segment<3>(14) = Om;
+  return v;
+}
+
+}  // namespace
+
+TEST_CASE("pair matrix: isolated spheres, symmetry and positive definiteness") {
+  const double mu = 1.3, pi = 3.14159265358979323846;
+  const Eigen::Vector3d dir(0.3, -0.5, 0.8);
+  {
+    // s = 1e5: interaction terms are O(1/s) = 1e-5 relative, so 1e-4.
+    const double a1 = 1.0, a2 = 2.5;
+    const PairMatrix R = pair_matrix(1e5, a1, a2, dir);
+    for (int a = 0; a < 2; ++a) {
+      const double rad = a == 0 ? a1 : a2;
+      const int o = 11 * a;
+      for (int i = 0; i < 3; ++i) {
+        CHECK(R(o + i, o + i) == doctest::Approx(6 * pi * mu * rad).epsilon(1e-4));
+        CHECK(R(o + 3 + i, o + 3 + i) == doctest::Approx(8 * pi * mu * rad * rad * rad).epsilon(1e-4));
+      }
+      for (int m = 0; m < 5; ++m)
+        CHECK(R(o + 6 + m, o + 6 + m) ==
+              doctest::Approx(20.0 / 3.0 * pi * mu * rad * rad * rad).epsilon(1e-4));
+    }
+  }
+  // Symmetry: the B, G, H couplings are built as transposes, so asymmetry can only come from
+  // A_12 != A_21, C_12 != C_21, M_12 != M_21, i.e. from the reciprocity of the series
+  // (1e-9 relative away from contact, ~1e-4 of the largest entry near contact).
+  for (double l : {0.2, 1.0, 3.0})
+    for (double xi : {1e-6, 1e-3, 0.05, 0.5, 4.0}) {
+      const PairMatrix R = pair_matrix(xi, 1.0, l, dir);
+      const double tol = (xi < 0.05 ? 1e-4 : 1e-9) * R.cwiseAbs().maxCoeff();
+      CAPTURE(l);
+      CAPTURE(xi);
+      CHECK((R - R.transpose()).cwiseAbs().maxCoeff() <= tol);
+      // Positive definite (dissipation): all eigenvalues of the symmetric part > 0.
+      const PairMatrix Rs = 0.5 * (R + R.transpose());
+      Eigen::SelfAdjointEigenSolver<PairMatrix> es(Rs);
+      CHECK(es.eigenvalues().minCoeff() > 0.0);
+    }
+}
+
+TEST_CASE("pair matrix: M basis tensors are projectors on m = 0, 1, 2") {
+  // With only X^M (resp. Y^M, Z^M) non-zero, the 5x5 M block has rank 1 (resp. 2, 2): a check
+  // of the J92 tensor forms d0, d1, d2 in the orthonormal basis.
+  ResistanceScalars z{};
+  const Eigen::Vector3d r(0.2, 0.9, -0.4);
+  for (int which = 0; which < 3; ++which) {
+    ResistanceScalars s = z;
+    (which == 0 ? s.XM11 : which == 1 ? s.YM11 : s.ZM11) = 1.0;
+    const PairMatrix R = two_sphere_resistance(r * 5.0, 1.0, 1.0, 1.0, s, z);
+    Eigen::Matrix<double, 5, 5> M = R.block<5, 5>(6, 6);
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 5, 5>> es(M);
+    int rank = 0;
+    for (int i = 0; i < 5; ++i) rank += es.eigenvalues()[i] > 1e-12;
+    CHECK(rank == (which == 0 ? 1 : 2));
+  }
+}
+
+TEST_CASE("pair matrix: rigid motions of a near-touching pair are not singular") {
+  // A rigid-body motion of the pair does not squeeze the gap, so all 1/xi and ln(1/xi) terms
+  // must cancel in R v (forces, torques and stresslets stay finite at contact).  This checks
+  // the relative signs of the 11, 12, 21, 22 scalars of every block, including the Y^B, X^G,
+  // Y^G sign changes under relabelling.  Between xi = 1e-6 and 1e-8 the uncancelled terms
+  // would change R v by ~ (1/xi) or ln(100) = 4.6 times O(|R v|); the cancelled form changes
+  // only by O(xi ln xi) ~ 1e-5 of the largest entry.  Tolerance 1e-3 relative.
+  const double a1 = 1.0;
+  for (double a2 : {0.3, 1.0, 2.0}) {
+    const Eigen::Vector3d dir(0.0, 0.6, 0.8);
+    const Eigen::Vector3d axes[3] = {dir, Eigen::Vector3d(1, 0, 0), dir.cross(Eigen::Vector3d(1, 0, 0))};
+    for (const auto& U : axes)
+      for (const auto& Om : axes) {
+        Eigen::Matrix<double, 22, 1> f[2];
+        for (int j = 0; j < 2; ++j) {
+          const double xi = j == 0 ? 1e-6 : 1e-8;
+          const double r = (2.0 + xi) * (a1 + a2) / 2.0;
+          const Eigen::Vector3d x1 = Eigen::Vector3d::Zero(), x2 = r * dir;
+          const PairMatrix R = two_sphere_resistance(x2 - x1, a1, a2, 1.0);
+          f[j] = R * rigid_motion(U, Om, x1 - 0.4 * x2, x2 - 0.4 * x2);
+        }
+        CAPTURE(a2);
+        CHECK((f[0] - f[1]).norm() <= 1e-3 * f[1].norm());
+      }
+  }
+}
