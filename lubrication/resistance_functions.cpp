@@ -1,38 +1,41 @@
 // Two-sphere resistance functions: twin-multipole series plus near-contact resummation.
 //
-// Mathematics implemented (details and accuracy: docs/lubrication.md):
+// Mathematics implemented (details and accuracy: docs/lubrication.md).  Equation numbers:
+// JO84 = Jeffrey & Onishi 1984, J92 = Jeffrey 1992, T23 = Townsend arXiv:1802.08226 v4,
+// I13 = Ichiki et al. 2013 (as cited in T23).
 //
-// 1. Twin-multipole recurrences (JO84 eqs. 3.9-3.10 for X^A, 4.6-4.11 for Y^A and Y^C,
-//    J92 eqs. 58 and 73-76 for the M functions, with the corrections of Townsend,
-//    arXiv:1802.08226 v4, eqs. 5-8 and 18).  Three families of recurrences ("X", "Y", "Z"
-//    type, for azimuthal mode m = 0, 1, 2) for the lambda-independent numbers P_npq, Q_npq,
-//    V_npq; different initial conditions give the different problems:
+// 1. Twin-multipole recurrences for lambda-independent numbers P_npq, Q_npq, V_npq:
+//    X^A type: T23 eqs. 5-8 (corrected JO84 section 3); Y^A type: JO84 eqs. 4.6-4.11 with
+//    T23 eq. 18; Y^C: JO84 eqs. 7.3-7.5; X^M: I13 eq. 104; Y^M: J92 eq. 58; Z^M: J92
+//    eqs. 73-76.  Three families ("X", "Y", "Z" type: azimuthal mode m = 0, 1, 2); the
+//    initial conditions select the problem:
 //       XA: P=V=delta_1n   YA: P=V=delta_1n, Q=0   YC: Q=delta_1n, P=V=0
 //       XM: P=V=delta_2n   YM: P=V=delta_2n, Q=0   ZM: P=V=delta_2n, Q=0.
-// 2. Series (JO84 eq. 3.12-3.15, J92 eqs. 20, 28, 36, 49, 65, 80; Ichiki et al. 2013):
+// 2. Series (JO84 eq. 3.15 and its analogues; I13 eqs. 94, 105, 115, 120, 125, 131):
 //       F_nat(s) = sum_k c_k t^k,   t = 2/s,   c_k = f_k(lambda) / (2 (1+lambda))^k,
 //    with f_k = 2^k sum_q P_{n, k-q, q} lambda^q (times lambda^(k mod 2) for C, H, M type).
 //    Self functions ("11") use one parity of k, cross functions ("12") the other.  The
 //    cross functions are converted from the natural scale of sphere 1 (6 pi mu a1,
 //    4 pi mu a1^2, 8 pi mu a1^3, ...) to the JO normalisation by the factor (2/(1+lambda))^m.
-// 3. Near contact (JO84 sections 3-7, J92): c_k -> a_k = g1 + 2 g2/k - 4 g3/(k(k+2)) as
-//    k -> infinity, with g1, g2, g3 the published lubrication coefficients (JO84 eqs. 3.19,
-//    4.16, 5.6, 7.10; J92 eqs. 19b, 27b, 35b, 48b, 64b, 79b).  We write
+// 3. Near contact: c_k -> a_k = g1 + 2 g2/k - 4 g3/(k(k+2)) as k -> infinity, with g1, g2,
+//    g3 the published lubrication coefficients (JO84 eqs. 3.17, 4.15-4.16, 5.6, 7.10; J92
+//    eqs. 19b, 27b, 35b, 48b, 64b, 79b; T23 corrections).  We write
 //       F_nat = sum_k (c_k - a_k) t^k + g1 S1(t) + g2 S2(t) - g3 S3(t),
 //    where S1..S3 are the exact sums of t^k, 2t^k/k, 4t^k/(k(k+2)) over the parity (closed
 //    forms below).  This is an identity for every t < 1; as t -> 1 (xi -> 0) it reduces to
 //    the JO form g1/xi + g2 ln(1/xi) + A + g3 xi ln(1/xi) + ..., and the O(1) constant A is
-//    the JO "series minus singular terms" limit (JO84 eqs. 3.22-3.23 etc.).  The remainder
-//    sum converges like k^-3 at t = 1, so the near-contact evaluation is uniform in xi.
+//    the JO "series minus singular terms" limit (JO84 eqs. 3.22-3.23, 4.17-4.18; J92 eqs.
+//    21, 29, 37, 50, 66, 81).  The remainder is small (k^-3 decay), so the evaluation is
+//    uniform in xi; the plain series is used for s >= 3.
 // 4. X^C: exact bispherical-coordinate solution for rotation about the line of centres
-//    (Jeffery 1915, Proc. Lond. Math. Soc. 14, 327; quoted in JO84 section 6):
+//    (Jeffery 1915, Proc. Lond. Math. Soc. 14, 327):
 //       T_1 = 8 pi mu c^3 Omega_1 sum_{n>=0} csch^3((n+1) alpha + n beta),
 //       T_2 = -8 pi mu c^3 Omega_1 sum_{n>=1} csch^3(n (alpha + beta)),
 //    c = a1 sinh(alpha) = a2 sinh(beta); tails summed by Euler-Maclaurin.  Its contact limit
-//    is the Hurwitz-zeta form of Townsend eqs. 26-27.
-// 5. Pair matrix: tensor forms of JO84 eq. (1.x) and J92 (A, B, C, G, H, M blocks; M basis
-//    d0 = 3/2 (dd - I/3)(dd - I/3), d1, d2 as in J92 / Kim & Karrila 1991 ch. 11), projected
-//    on the orthonormal symmetric-traceless basis of engine/sym_traceless.hpp.
+//    is the Hurwitz-zeta form of T23 eqs. 26-27.
+// 5. Pair matrix: tensor forms of the A, B, C (JO84) and G, H, M (J92) blocks, with the M
+//    basis d0 = 3/2 (dd - I/3)(dd - I/3), d1, d2 of J92 (also Kim & Karrila 1991, ch. 11),
+//    projected on the orthonormal symmetric-traceless basis of engine/sym_traceless.hpp.
 
 #include "lubrication/resistance_functions.hpp"
 

@@ -11,21 +11,27 @@
 // d = (x2 - x1)/r (unit vector FROM sphere 1 TO sphere 2), lambda = a2/a1,
 // s = 2r/(a1 + a2) (> 2), gap xi = s - 2.
 //
-// Convention (JO84 eq. 1.1-1.6, J92 eq. 1-8): particles exert (F, T, S) on the fluid and
-//   (F_a, T_a, S_a) = mu * sum_b [ A_ab  Bt_ab  Gt_ab ] (U_b - U_inf(x_b), Omega_b - Omega_inf, -E_inf)
-//                            [ B_ab  C_ab   Ht_ab ]
-//                            [ G_ab  H_ab   M_ab  ]
+// Convention (JO84 section 1, J92 section II): particles exert (F, T, S) on the fluid and
+//   (F_a, T_a, S_a) = sum_b [ A_ab  Bt_ab  Gt_ab ] (U_b - U_inf(x_b), Omega_b - Omega_inf, -E_inf)
+//                           [ B_ab  C_ab   Ht_ab ]
+//                           [ G_ab  H_ab   M_ab  ]
 // with, for each ordered pair (a, b) in {1,2}^2,
 //   A_ij   = X^A (d_i d_j) + Y^A (delta_ij - d_i d_j)
 //   B_ij   = Y^B eps_ijk d_k
 //   C_ij   = X^C (d_i d_j) + Y^C (delta_ij - d_i d_j)
 //   G_ijk  = X^G (d_i d_j - delta_ij/3) d_k + Y^G (d_i delta_jk + d_j delta_ik - 2 d_i d_j d_k)
 //   H_ijk  = Y^H (eps_ikl d_l d_j + eps_jkl d_l d_i)
-//   M_ijkl = X^M d^(0)_ijkl + Y^M d^(1)_ijkl + Z^M d^(2)_ijkl     (J92 eq. 8; see docs)
+//   M_ijkl = X^M d0_ijkl + Y^M d1_ijkl + Z^M d2_ijkl   (J92), with
+//     d0 = 3/2 (d_i d_j - delta_ij/3)(d_k d_l - delta_kl/3)
+//     d1 = 1/2 (d_i delta_jl d_k + d_j delta_il d_k + d_i delta_jk d_l + d_j delta_ik d_l
+//               - 4 d_i d_j d_k d_l)
+//     d2 = 1/2 (delta_ik delta_jl + delta_jk delta_il - delta_ij delta_kl + d_i d_j delta_kl
+//               + delta_ij d_k d_l - d_i delta_jl d_k - d_j delta_il d_k - d_i delta_jk d_l
+//               - d_j delta_ik d_l + d_i d_j d_k d_l)
 // and Bt_ab = B_ba^T, Gt_ab = G_ba^T, Ht_ab = H_ba^T (reciprocal theorem).
 //
-// Normalisation (JO84 eq. 1.6 / J92 eq. 9): the dimensional function is the dimensionless one
-// returned here times
+// Normalisation (JO84, J92; verified by the far-field tests): the dimensional function is the
+// dimensionless one returned here times
 //   X^A, Y^A            : 3 pi mu (a_a + a_b)
 //   Y^B                 : pi mu (a_a + a_b)^2
 //   X^C, Y^C            : pi mu (a_a + a_b)^3
@@ -40,6 +46,7 @@
 //   F_22(s, lambda) =  F_11(s, 1/lambda),  F_21(s, lambda) =  F_12(s, 1/lambda)
 // for F in {X^A, Y^A, X^C, Y^C, Y^H, X^M, Y^M, Z^M} (tensor forms even in d), and with a minus
 // sign for F in {Y^B, X^G, Y^G} (tensor forms odd in d).  relabel_spheres() applies this.
+// (Y^H has d twice, hence no sign change; the pair-matrix tests fail if one is added.)
 
 #include <Eigen/Dense>
 
@@ -80,8 +87,8 @@ struct NearContactForm {
 inline constexpr int kSeriesOrder = STOKESIAN_LUB_SERIES_ORDER;
 
 /// All resistance functions for one size ratio lambda = a2/a1 (0 < lambda; tested for
-/// 0.01 <= lambda <= 100).  Construction costs ~1 ms once the lambda-independent recurrence
-/// coefficients exist; these are computed on first use (~1 s) and shared by all instances.
+/// 0.01 <= lambda <= 100).  Construction costs ~0.2 ms once the lambda-independent recurrence
+/// coefficients exist; these are computed on first use (1-7 s) and shared by all instances.
 class ResistanceSeries {
  public:
   explicit ResistanceSeries(double lambda);
