@@ -252,12 +252,12 @@ const Coefficients& coefficients() {
 
 // ---------------------------------------------------------------------------------------------
 // Sums over k >= 1 of the given parity of t^k, 2 t^k / k and 4 t^k / (k (k+2)).
-// one_minus_t2 = 1 - t^2 is passed separately (= xi (4 + xi) / s^2, no cancellation).
+// one_minus_t2 = 1 - t^2 = xi (4 + xi) / s^2 and xi are passed to avoid cancellation.
 struct SingularSums {
   double S1, S2, S3;
 };
 
-SingularSums singular_sums(int parity, double t, double one_minus_t2) {
+SingularSums singular_sums(int parity, double t, double one_minus_t2, double xi) {
   SingularSums r{};
   if (t < 0.5) {  // direct power series (closed forms cancel for small t)
     double tk = parity ? t : t * t;
@@ -277,7 +277,8 @@ SingularSums singular_sums(int parity, double t, double one_minus_t2) {
     r.S2 = L;
     r.S3 = 1.0 - one_minus_t2 * L / t2;
   } else {
-    const double L = std::log1p(2.0 * t / (1.0 - t));  // 2 atanh(t) = sum 2 t^k / k (k odd)
+    // 2 atanh(t) = ln((1+t)/(1-t)) = ln((4+xi)/xi) = sum 2 t^k / k (k odd)
+    const double L = std::log1p(4.0 / xi);
     r.S1 = t / one_minus_t2;
     r.S2 = L;
     r.S3 = 2.0 / t - one_minus_t2 * L / t2;
@@ -518,7 +519,7 @@ double ResistanceSeries::series_value(const Function& f, double xi, bool resum) 
   if (f.parity == 1) acc *= t;
   if (resum) {
     const double omt2 = xi * (4.0 + xi) / (s * s);
-    const SingularSums S = singular_sums(f.parity, t, omt2);
+    const SingularSums S = singular_sums(f.parity, t, omt2, xi);
     acc += f.g1 * S.S1 + f.g2 * S.S2 - f.g3 * S.S3;
   }
   return f.factor * acc;

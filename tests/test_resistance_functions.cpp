@@ -437,3 +437,20 @@ TEST_CASE("pair matrix: rigid motions of a near-touching pair are not singular")
       }
   }
 }
+
+TEST_CASE("table cache returns 11/12 and 22/21 scalars of a pair") {
+  // Same functions as the direct evaluation; the only difference is the interpolation error
+  // (< 3e-8 relative, see the table test), hence 1e-7.
+  ResistanceTableCache cache;
+  const double a1 = 0.7, a2 = 2.1, xi = 3e-3;
+  const double r = (2.0 + xi) * (a1 + a2) / 2.0;
+  ResistanceScalars p, q;
+  cache.pair_scalars(r, a1, a2, p, q);
+  const ResistanceScalars dp = ResistanceSeries(a2 / a1).at_gap(xi);
+  const ResistanceScalars dq = relabel_spheres(ResistanceSeries(a1 / a2).at_gap(xi));
+  for (int i = 0; i < kNumScalars; ++i) {
+    CHECK(std::abs(scalar_at(p, i) - scalar_at(dp, i)) <= 1e-7 * std::abs(scalar_at(dp, i)) + 1e-12);
+    CHECK(std::abs(scalar_at(q, i) - scalar_at(dq, i)) <= 1e-7 * std::abs(scalar_at(dq, i)) + 1e-12);
+  }
+  CHECK(&cache.get(a2 / a1) == &cache.get(a2 / a1));  // one table per lambda
+}
