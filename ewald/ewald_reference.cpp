@@ -50,7 +50,7 @@ MatX ewald_mobility(const std::vector<Vec3>& x, const std::vector<double>& a, do
   // Real space: every pair (both orders, so symmetry is a test, not an assumption) and images.
   const auto nb = index_bounds(lat.Ainv, rmax + lat.A.norm());
 #pragma omp parallel for schedule(dynamic)
-  for (long i = 0; i < n; ++i) {
+  for (long i = 0; i < (opt.real ? n : 0); ++i) {
     for (long j = 0; j < n; ++j) {
       const Vec3 r0 = lat.nearest_image(x[i] - x[j]);
       for (int p = -nb[0]; p <= nb[0]; ++p)
@@ -69,6 +69,7 @@ MatX ewald_mobility(const std::vector<Vec3>& x, const std::vector<double>& a, do
   // The lattice-point bound uses the inverse of B, i.e. A^T / (2 pi).
   const auto kb = index_bounds(lat.A.transpose() / (2.0 * kPi), kmax);
   std::vector<Vec3> ks;
+  if (!opt.wave) return M;
   for (int p = 0; p <= kb[0]; ++p)
     for (int q = -kb[1]; q <= kb[1]; ++q)
       for (int t = -kb[2]; t <= kb[2]; ++t) {

@@ -22,6 +22,8 @@ namespace stokesian::ewald {
 struct EwaldReferenceOptions {
   double xi = 0.0;    // splitting parameter [1/a]; 0 = sqrt(pi) / V^(1/3) (balanced sums)
   double tail = 7.5;  // xi r_max = k_max / (2 xi): truncation of both sums
+  bool real = true;   // include the real-space sum and the self correction
+  bool wave = true;   // include the wave-space sum
 };
 
 // Dense (dN x dN) periodic grand mobility, layout [F(3) T(3) S(5)] per particle.

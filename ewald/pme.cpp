@@ -1,0 +1,148 @@
+// PME far field: set-up and the three parts of the product; mathematics in pme.hpp.
+#include "ewald/pme.hpp"
+
+#include "engine/mobility_pair.hpp"
+#include "ewald/ewald_split.hpp"
+#include "ewald/interpolate.hpp"
+#include "ewald/kernel.hpp"
+#include "trees/neighbor_list.hpp"
+
+#include <fftw3.h>
+
+#include <algorithm>
+#include <complex>
+#include <stdexcept>
+
+namespace stokesian::ewald {
+
+// FFTW plans (made once per grid, FFTW_ESTIMATE so the plan -- hence the result -- does not depend
+// on timing) and the work arrays, one real and one complex array per field.
+struct PmeFarField::Fft {
+  fftw_plan forward = nullptr, backward = nullptr;
+  std::vector<double*> real;
+  std::vector<std::complex<double>*> spectral;
+  ~Fft() {
+    for (double* p : real) fftw_free(p);
+    for (auto* p : spectral) fftw_free(p);
+    if (forward) fftw_destroy_plan(forward);
+    if (backward) fftw_destroy_plan(backward);
+  }
+};
+
+PmeFarField::PmeFarField(const std::vector<Vec3>& x, const std::vector<double>& a, double mu, Moments m,
+                         const Domain& domain, double tolerance, const PmeOptions& opt)
+    : n_(long(x.size())), mu_(mu), m_(m), lattice_(Lattice::from_domain(domain)) {
+  if (x.size() != a.size() || x.empty()) throw std::invalid_argument("PmeFarField: bad particle arrays");
+  const auto [amin, amax] = std::minmax_element(a.begin(), a.end());
+  p_ = pme_parameters(tolerance, lattice_, int(n_), *amin, *amax, m, opt);
+
+  // Grid and windows in fractional coordinates.
+  grid_.M = p_.grid;
+  grid_.P = p_.support;
+  grid_.s = p_.width;
+  const Mat3 metric = lattice_.Ainv * lattice_.Ainv.transpose();
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) grid_.lap(i, j) = metric(i, j) * grid_.M[i] * grid_.M[j];
+  std::vector<Vec3> s(n_);
+  for (long p = 0; p < n_; ++p) s[p] = lattice_.Ainv * x[p];
+  windows_ = make_windows(grid_, s, a);
+  colouring_ = colour_slabs(grid_, windows_);
+
+  // Real-space pairs and their scalars (both directions: radii may differ).
+  const auto pairs = trees::neighbor_pairs(x, a, domain, p_.cutoff_gap);
+  pairs_.resize(pairs.size());
+#pragma omp parallel for schedule(dynamic, 64)
+  for (long q = 0; q < long(pairs.size()); ++q) {
+    const auto& np = pairs[q];
+    Pair& pr = pairs_[q];
+    pr.i = np.i;
+    pr.j = np.j;
+    pr.e = np.r / np.dist;
+    pr.ij = real_scalars(a[np.i], a[np.j], np.dist, p_.xi, mu, m);
+    pr.ji = real_scalars(a[np.j], a[np.i], np.dist, p_.xi, mu, m);
+  }
+  pair_start_.assign(n_ + 1, 0);
+  for (const Pair& pr : pairs_) {
+    ++pair_start_[pr.i + 1];
+    ++pair_start_[pr.j + 1];
+  }
+  for (long i = 0; i < n_; ++i) pair_start_[i + 1] += pair_start_[i];
+  pair_list_.resize(2 * pairs_.size());
+  std::vector<int> fill(pair_start_.begin(), pair_start_.end() - 1);
+  for (int q = 0; q < int(pairs_.size()); ++q) {
+    pair_list_[fill[pairs_[q].i]++] = 2 * q;
+    pair_list_[fill[pairs_[q].j]++] = 2 * q + 1;
+  }
+  self_F_.resize(n_);
+  self_T_.resize(n_);
+  self_S_.resize(n_);
+  for (long i = 0; i < n_; ++i) {
+    const PairScalars sc = self_correction(a[i], p_.xi, mu);
+    self_F_[i] = sc.xa;
+    self_T_[i] = sc.xc;
+    self_S_[i] = sc.xm;
+  }
+
+  // FFTW arrays and plans.
+  fft_ = std::make_unique<Fft>();
+  const int d = dof_per_particle(m);
+  const long npts = grid_.points(), nspec = long(grid_.M[0]) * grid_.M[1] * (grid_.M[2] / 2 + 1);
+  for (int c = 0; c < d; ++c) {
+    fft_->real.push_back(static_cast<double*>(fftw_malloc(sizeof(double) * npts)));
+    fft_->spectral.push_back(static_cast<std::complex<double>*>(fftw_malloc(sizeof(fftw_complex) * nspec)));
+    if (!fft_->real.back() || !fft_->spectral.back()) throw std::bad_alloc();
+  }
+  auto* c0 = reinterpret_cast<fftw_complex*>(fft_->spectral[0]);
+  fft_->forward = fftw_plan_dft_r2c_3d(grid_.M[0], grid_.M[1], grid_.M[2], fft_->real[0], c0, FFTW_ESTIMATE);
+  fft_->backward = fftw_plan_dft_c2r_3d(grid_.M[0], grid_.M[1], grid_.M[2], c0, fft_->real[0], FFTW_ESTIMATE);
+  if (!fft_->forward || !fft_->backward) throw std::runtime_error("PmeFarField: FFTW planning failed");
+}
+
+PmeFarField::~PmeFarField() = default;
+
+void PmeFarField::apply_wave(const VecX& in, VecX& out) const {
+  const int d = dof_per_particle(m_);
+  spread(grid_, windows_, colouring_, m_, in, fft_->real);
+  // The d transforms are independent: one per thread (fftw_execute_* is thread-safe).
+#pragma omp parallel for schedule(static)
+  for (int c = 0; c < d; ++c)
+    fftw_execute_dft_r2c(fft_->forward, fft_->real[c], reinterpret_cast<fftw_complex*>(fft_->spectral[c]));
+  apply_fourier_kernel(grid_, lattice_, p_.xi, mu_, m_, fft_->spectral);
+#pragma omp parallel for schedule(static)
+  for (int c = 0; c < d; ++c)
+    fftw_execute_dft_c2r(fft_->backward, reinterpret_cast<fftw_complex*>(fft_->spectral[c]), fft_->real[c]);
+  interpolate(grid_, windows_, m_, fft_->real, out);
+}
+
+void PmeFarField::apply_real(const VecX& in, VecX& out) const {
+  const int d = dof_per_particle(m_);
+  out.setZero(n_ * d);
+  // Each particle gathers its own row: no write conflicts, fixed summation order.
+#pragma omp parallel for schedule(dynamic, 64)
+  for (long i = 0; i < n_; ++i) {
+    double* yi = out.data() + i * d;
+    const double* xi = in.data() + i * d;
+    for (int c = 0; c < 3; ++c) yi[c] += self_F_[i] * xi[c];
+    if (d > 3)
+      for (int c = 3; c < 6; ++c) yi[c] += self_T_[i] * xi[c];
+    if (d > 6)
+      for (int c = 6; c < 11; ++c) yi[c] += self_S_[i] * xi[c];
+    for (int t = pair_start_[i]; t < pair_start_[i + 1]; ++t) {
+      const Pair& pr = pairs_[pair_list_[t] / 2];
+      if (pair_list_[t] % 2 == 0)
+        mobility::apply_pair(pr.ij, pr.e, m_, in.data() + long(pr.j) * d, yi);
+      else
+        mobility::apply_pair(pr.ji, Vec3(-pr.e), m_, in.data() + long(pr.i) * d, yi);
+    }
+  }
+}
+
+void PmeFarField::apply(const VecX& in, VecX& out) const {
+  if (in.size() != size()) throw std::invalid_argument("PmeFarField::apply: wrong input size");
+  VecX real;
+  apply_wave(in, out);
+  apply_real(in, real);
+  out += real;
+}
+
+}  // namespace stokesian::ewald

@@ -1,0 +1,72 @@
+#pragma once
+// PME-style periodic far field: y = M x in O(N log N), M the Ewald-summed grand mobility of
+// ewald_reference.hpp (Hasimoto split, truncated Faxen factors in the wave part, exact
+// overlap-regularised kernel kept in the real part).
+//
+// Product, per call [Sierou & Brady 2001, s.3; Lindbo & Tornberg 2010, s.3]:
+//   wave part: spread F, T, S with the Gaussian window + Faxen Laplacian (spread.hpp), FFTW r2c,
+//              multiply by the Fourier kernel (kernel.hpp), FFTW c2r, interpolate U, Omega, E
+//              (interpolate.hpp);
+//   real part: sum over pairs with |r| < cutoff_gap + a_i + a_j of the real-space blocks
+//              (ewald_split.hpp), pairs from trees::neighbor_pairs (minimum image, Lees-Edwards);
+//   self part: M_self_free - wave(r = 0) per particle.
+// Everything that depends only on the configuration (windows, slab colouring, pair scalars, FFTW
+// plans) is prepared in the constructor; apply() is then repeatable and its result is independent
+// of the number of OpenMP threads. All parameters come from the tolerance (pme_parameters.hpp).
+// Lees-Edwards: the grid lives on fractional coordinates of the sheared lattice (lattice.hpp) and
+// the kernel uses the sheared reciprocal vectors; the strain is reduced first, so the operator is
+// exactly periodic in the strain.
+#include "engine/far_field.hpp"
+#include "engine/mobility_pair.hpp"
+#include "engine/state.hpp"
+#include "ewald/lattice.hpp"
+#include "ewald/pme_parameters.hpp"
+#include "ewald/spread.hpp"
+
+#include <memory>
+#include <vector>
+
+namespace stokesian::ewald {
+
+class PmeFarField final : public FarFieldOperator {
+ public:
+  PmeFarField(const std::vector<Vec3>& x, const std::vector<double>& a, double mu, Moments m, const Domain& domain,
+              double tolerance, const PmeOptions& opt = {});
+  ~PmeFarField() override;
+  PmeFarField(const PmeFarField&) = delete;
+  PmeFarField& operator=(const PmeFarField&) = delete;
+
+  Moments moments() const override { return m_; }
+  Eigen::Index size() const override { return Eigen::Index(n_) * dof_per_particle(m_); }
+  void apply(const VecX& in, VecX& out) const override;
+  const char* name() const override { return "pme"; }
+
+  const PmeParameters& parameters() const { return p_; }
+  std::size_t real_pairs() const { return pairs_.size(); }
+
+  // The three parts separately (out is overwritten), for tests and timing.
+  void apply_wave(const VecX& in, VecX& out) const;
+  void apply_real(const VecX& in, VecX& out) const;  // real space + self
+
+ private:
+  struct Pair {
+    int i, j;
+    Vec3 e;                           // (x_i - x_j) / |x_i - x_j|, minimum image
+    mobility::PairScalars ij, ji;     // response at i from j, response at j from i
+  };
+  struct Fft;
+  long n_;
+  double mu_;
+  Moments m_;
+  Lattice lattice_;
+  PmeParameters p_;
+  GridGeometry grid_;
+  ParticleWindows windows_;
+  SlabColouring colouring_;
+  std::vector<Pair> pairs_;
+  std::vector<int> pair_start_, pair_list_;  // CSR: entries of particle i, 2*pair + (role)
+  std::vector<double> self_F_, self_T_, self_S_;
+  std::unique_ptr<Fft> fft_;
+};
+
+}  // namespace stokesian::ewald
