@@ -4,18 +4,27 @@
 #include "engine/far_field.hpp"
 #include "engine/krylov.hpp"
 #include "engine/mobility_pair.hpp"
+#include "engine/sd_dense.hpp"
 
 #include <cmath>
 #include <sstream>
 
 namespace stokesian {
 
-Hydrodynamics::Hydrodynamics(const ResolvedModel& model, double viscosity, const AmbientFlow& flow, double tolerance)
-    : model_(model), mu_(viscosity), flow_(flow), tol_(tolerance) {}
+Hydrodynamics::Hydrodynamics(const ResolvedModel& model, double viscosity, const AmbientFlow& flow, double tolerance,
+                             double lubrication_cutoff, double lubrication_min_gap)
+    : model_(model), mu_(viscosity), flow_(flow), tol_(tolerance) {
+  if (model_.level == HydroModel::stokesian)
+    sd_ = std::make_unique<DenseStokesianDynamics>(model_.moments, mu_, flow_,
+                                                   lubrication::NearFieldParams{lubrication_cutoff, lubrication_min_gap});
+}
+Hydrodynamics::~Hydrodynamics() = default;
+Hydrodynamics::Hydrodynamics(Hydrodynamics&&) noexcept = default;
 
 HydroResult Hydrodynamics::solve(const std::vector<Vec3>& x, const std::vector<double>& a,
                                  const std::vector<char>& fixed, const std::vector<Vec3>& F,
                                  const std::vector<Vec3>& T) const {
+  if (sd_) return sd_->mobility_problem(x, a, fixed, F, T);
   const Moments m = model_.moments;
   const int d = dof_per_particle(m);
   const long n = long(x.size());

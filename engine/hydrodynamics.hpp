@@ -9,7 +9,8 @@
 // = 0; constrained mobility problem, seed 1 s.2.1.2). The unknowns z solve the principal
 // sub-system M_zz z = target_z - M_zk x_k, which is symmetric positive definite because M is
 // (engine/mobility_pair.hpp), by conjugate gradients to the scene's tolerance.
-// Free draining keeps only the self blocks (U = F/(6 pi mu a), ...).
+// Free draining keeps only the self blocks (U = F/(6 pi mu a), ...). Stokesian dynamics
+// (R = M_inf^{-1} + R_nf) uses the dense reference solver of engine/sd_dense.hpp.
 //
 // Brownian displacements (kT > 0, F and FT): dX_B = sqrt(2 kT dt) M^{1/2} W with W standard
 // normal; M^{1/2} W by Lanczos (engine/krylov.hpp). M_inf is divergence free (translational
@@ -18,6 +19,7 @@
 #include "engine/model.hpp"
 #include "engine/sym_traceless.hpp"
 
+#include <memory>
 #include <random>
 #include <vector>
 
@@ -30,9 +32,14 @@ struct HydroResult {
   int iterations = 0;          // Krylov iterations of the constrained solve
 };
 
+class DenseStokesianDynamics;
+
 class Hydrodynamics {
  public:
-  Hydrodynamics(const ResolvedModel& model, double viscosity, const AmbientFlow& flow, double tolerance);
+  Hydrodynamics(const ResolvedModel& model, double viscosity, const AmbientFlow& flow, double tolerance,
+                double lubrication_cutoff = 4.0, double lubrication_min_gap = 1e-6);
+  ~Hydrodynamics();
+  Hydrodynamics(Hydrodynamics&&) noexcept;
 
   // F, T: non-hydrodynamic force and torque on each particle (T ignored at F level).
   HydroResult solve(const std::vector<Vec3>& x, const std::vector<double>& a, const std::vector<char>& fixed,
@@ -49,6 +56,7 @@ class Hydrodynamics {
   double mu_;
   AmbientFlow flow_;
   double tol_;
+  std::unique_ptr<DenseStokesianDynamics> sd_;  // model "stokesian" (dense reference solver)
 };
 
 }  // namespace stokesian

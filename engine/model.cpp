@@ -65,28 +65,46 @@ ResolvedModel resolve_model(const Scene& s) {
   m.reasons.push_back(m.brownian ? "fluid.kT > 0: Brownian motion on" : "fluid.kT = 0: athermal");
 
   // Level.
+  constexpr std::size_t kDenseSdLimit = 2000;  // dense SD is O(N^3) in time and O(N^2) memory
   if (s.hydro.model == HydroModel::auto_) {
     if (n <= 1) {
       m.level = HydroModel::free_draining;
       m.reasons.push_back("auto level: a single particle has no hydrodynamic interactions -> free_draining");
     } else {
-      m.level = HydroModel::far_field;
       const double g = min_gap(s);
       std::ostringstream r;
-      r << "auto level: " << n << " particles interact hydrodynamically -> far_field";
-      if (g < 0.5)
-        r << " (smallest initial gap " << g
-          << " a < 0.5 a: Stokesian dynamics would be more accurate, but near-field lubrication is not"
-             " in this version; set model = \"far_field\" to silence)";
+      const bool near = g < 0.5 || !s.forces.pair.empty();
+      if (near && !s.domain.periodic() && !m.brownian && n <= kDenseSdLimit) {
+        m.level = HydroModel::stokesian;
+        r << "auto level: " << (g < 0.5 ? "close pairs (smallest gap " : "pair forces bring particles together (smallest gap ")
+          << g << " a) -> stokesian (far field + lubrication, dense solver for N = " << n << ")";
+      } else {
+        m.level = HydroModel::far_field;
+        r << "auto level: " << n << " particles interact hydrodynamically -> far_field";
+        if (near) {
+          r << " (lubrication would be more accurate";
+          if (s.domain.periodic()) r << ", but periodic Stokesian dynamics is not in this version";
+          else if (m.brownian) r << ", but Brownian Stokesian dynamics is not in this version";
+          else r << ", but N > " << kDenseSdLimit << " needs the accelerated solver, not in this version";
+          r << "; set model = \"far_field\" to silence)";
+        }
+      }
       m.reasons.push_back(r.str());
     }
   } else {
     m.level = s.hydro.model;
     m.reasons.push_back(std::string("level set by scene: ") + to_string(m.level));
   }
-  if (m.level == HydroModel::stokesian)
-    unavailable(s, "model", "\"stokesian\" needs the near-field lubrication of a later version; available: "
-                            "\"free_draining\", \"far_field\", \"auto\"");
+  if (m.level == HydroModel::stokesian) {
+    if (s.domain.periodic())
+      unavailable(s, "model", "\"stokesian\" in periodic domains needs the periodic far field of a later version");
+    if (m.brownian)
+      unavailable(s, "model", "\"stokesian\" with fluid.kT > 0 needs near-field Brownian forces and drift, not in this "
+                              "version; use \"far_field\" or kT = 0");
+    if (n > kDenseSdLimit)
+      unavailable(s, "model", "\"stokesian\" uses the dense reference solver, limited to N <= " +
+                              std::to_string(kDenseSdLimit) + " in this version (N = " + std::to_string(n) + ")");
+  }
 
   // Moments.
   const bool torques = std::any_of(s.forces.external_torque.begin(), s.forces.external_torque.end(),
@@ -98,6 +116,10 @@ ResolvedModel resolve_model(const Scene& s) {
     } else if (torques || (m.level != HydroModel::free_draining && flow.any())) {
       m.moments = Moments::FT;
       m.reasons.push_back("auto moments: torques or ambient vorticity present -> FT");
+    } else if (m.level == HydroModel::stokesian) {
+      m.moments = Moments::FT;
+      m.reasons.push_back("auto moments: torque-free spheres rotate near contact; F-level lubrication would hold "
+                          "them non-rotating -> FT");
     } else if (m.level == HydroModel::free_draining && flow.has_strain()) {
       m.moments = Moments::FTS;
       m.reasons.push_back("auto moments: free-draining stresslets of isolated spheres in the strain -> FTS");
@@ -111,11 +133,13 @@ ResolvedModel resolve_model(const Scene& s) {
     m.reasons.push_back(std::string("moments set by scene: ") + to_string(m.moments));
     if (torques && m.moments == Moments::F)
       unavailable(s, "moments", "\"F\" ignores the scene's external torques; use \"FT\" or \"FTS\"");
+    if (m.level == HydroModel::stokesian && m.moments == Moments::F)
+      m.reasons.push_back("note: F-level Stokesian dynamics treats the spheres as non-rotating");
   }
 
   // Far-field method.
   if (m.level != HydroModel::free_draining) {
-    if (s.domain.periodic())
+    if (s.domain.periodic() && m.level == HydroModel::far_field)
       unavailable(s, "far_field", "periodic domains need the Ewald/PME far field of a later version; use "
                                   "model = \"free_draining\" or an open domain");
     if (s.hydro.far_field == FarFieldMethod::auto_ || s.hydro.far_field == FarFieldMethod::direct) {
@@ -127,6 +151,9 @@ ResolvedModel resolve_model(const Scene& s) {
       unavailable(s, "far_field", std::string("\"") + to_string(s.hydro.far_field) +
                                       "\" is not in this version; available for open domains: \"direct\", \"auto\"");
     }
+    if (m.level == HydroModel::stokesian)
+      m.reasons.push_back("near field: exact two-sphere resistance minus the two-body far field, pairs with "
+                          "2r/(a_i+a_j) < lubrication_cutoff");
     if (m.brownian && m.moments == Moments::FTS)
       unavailable(s, "moments", "Brownian motion with rigid-particle stresslets (FTS) needs the Stokesian-dynamics "
                                 "Brownian solver of a later version; use moments = \"FT\" or kT = 0");

@@ -66,6 +66,8 @@ struct HydroParams {
   MomentChoice moments = MomentChoice::auto_;
   FarFieldMethod far_field = FarFieldMethod::auto_;
   double tolerance = 1e-6;  // relative accuracy of far-field products and iterative solves
+  double lubrication_cutoff = 4.0;  // near field for pairs with 2r/(a_i+a_j) below this [1]
+  double lubrication_min_gap = 1e-6;  // regularised minimum symmetric gap xi = 2r/(a_i+a_j) - 2 [1]
 };
 
 enum class Integrator { euler, midpoint, rkf45 };

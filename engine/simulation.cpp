@@ -20,7 +20,8 @@ Simulation::Simulation(Scene scene)
     : scene_(std::move(scene)),
       model_(resolve_model(scene_)),
       flow_(ambient_flow(scene_.flow)),
-      hydro_(model_, scene_.fluid.viscosity, flow_, scene_.hydro.tolerance) {}
+      hydro_(model_, scene_.fluid.viscosity, flow_, scene_.hydro.tolerance, scene_.hydro.lubrication_cutoff,
+             scene_.hydro.lubrication_min_gap) {}
 
 State Simulation::initial_state() const {
   State s;

@@ -360,7 +360,7 @@ Scene parse_scene(const std::string& text, const std::string& source) {
     R.fail(&flow, "[flow] rate", "required when kind is not \"none\"");
 
   const toml::table& hy = sub(R, root, "hydrodynamics");
-  R.only(hy, "hydrodynamics", {"model", "moments", "far_field", "tolerance"});
+  R.only(hy, "hydrodynamics", {"model", "moments", "far_field", "tolerance", "lubrication_cutoff", "lubrication_min_gap"});
   const std::string model = R.choice(hy, "hydrodynamics", "model", "auto", {"auto", "free_draining", "far_field", "stokesian"});
   s.hydro.model = model == "free_draining" ? HydroModel::free_draining
                 : model == "far_field" ? HydroModel::far_field
@@ -371,6 +371,8 @@ Scene parse_scene(const std::string& text, const std::string& source) {
   s.hydro.far_field = ff == "direct" ? FarFieldMethod::direct : ff == "ewald" ? FarFieldMethod::ewald
                     : ff == "pme" ? FarFieldMethod::pme : ff == "tree" ? FarFieldMethod::tree : FarFieldMethod::auto_;
   s.hydro.tolerance = R.number(hy, "hydrodynamics", "tolerance", 1e-6, 1e-14, 0.1);
+  s.hydro.lubrication_cutoff = R.number(hy, "hydrodynamics", "lubrication_cutoff", 4.0, 2.0, 100.0, true);
+  s.hydro.lubrication_min_gap = R.number(hy, "hydrodynamics", "lubrication_min_gap", 1e-6, 1e-8, 0.1);
 
   const toml::table& br = sub(R, root, "brownian");
   R.only(br, "brownian", {"seed"});

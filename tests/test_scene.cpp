@@ -53,6 +53,10 @@ TEST_CASE("model resolution: cheapest adequate level and moments, recorded with 
   CHECK(model("[forces]\nexternal_torque = [0, 0, 1]\n").moments == Moments::FT);
   CHECK(model("[hydrodynamics]\nmodel = \"free_draining\"\n").level == HydroModel::free_draining);
   CHECK(model("[hydrodynamics]\nmoments = \"FTS\"\n").moments == Moments::FTS);
+  // Close pairs in an open athermal scene resolve to Stokesian dynamics; Brownian ones cannot yet.
+  const std::string close = "[particles]\npositions = [[0,0,0],[2.1,0,0]]\n";
+  CHECK(resolve_model(io::parse_scene(close, "c.toml")).level == HydroModel::stokesian);
+  CHECK(resolve_model(io::parse_scene(close + "[fluid]\nkT = 1.0\n", "c.toml")).level == HydroModel::far_field);
   CHECK(resolve_model(io::parse_scene("[particles]\npositions = [[0,0,0]]\n", "one.toml")).level ==
         HydroModel::free_draining);
   CHECK(contains(model("").describe(), "auto level"));
@@ -121,7 +125,11 @@ TEST_CASE("bad input names the file, line, key and allowed values") {
 }
 
 TEST_CASE("asking for a model the engine lacks is an error, not a fallback") {
-  CHECK(contains(error_of(kTwo + "[hydrodynamics]\nmodel = \"stokesian\"\n"), "model"));
+  CHECK(contains(error_of(kTwo + "[fluid]\nkT = 1.0\n[hydrodynamics]\nmodel = \"stokesian\"\n"), "Brownian"));
+  CHECK(contains(error_of("[domain]\nkind = \"periodic\"\nbox = [10, 10, 10]\n" + kTwo +
+                          "[hydrodynamics]\nmodel = \"stokesian\"\n"), "periodic"));
+  CHECK(contains(error_of("[domain]\nkind = \"periodic\"\nbox = [10, 10, 10]\n" + kTwo +
+                          "[hydrodynamics]\nmodel = \"far_field\"\n"), "periodic"));
   CHECK(contains(error_of(kTwo + "[hydrodynamics]\nfar_field = \"tree\"\n"), "not in this version"));
   CHECK(contains(error_of(kTwo + "[fluid]\nkT = 1.0\n[flow]\nkind = \"simple_shear\"\nrate = 1.0\n"), "FTS"));
   CHECK(contains(error_of(kTwo + "[fluid]\nkT = 1.0\n[time]\nintegrator = \"rkf45\"\n"), "rkf45"));

@@ -1,0 +1,112 @@
+#include "lubrication/near_field.hpp"
+
+#include "engine/far_field.hpp"
+#include "trees/neighbor_list.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace stokesian::lubrication {
+
+namespace {
+// Indices of the level-m entries inside the 22-entry FTS pair layout [F1 T1 S1 F2 T2 S2].
+std::vector<int> level_indices(Moments m) {
+  const int d = dof_per_particle(m);
+  std::vector<int> idx;
+  for (int p = 0; p < 2; ++p)
+    for (int k = 0; k < d; ++k) idx.push_back(11 * p + k);
+  return idx;
+}
+}  // namespace
+
+NearField::NearField(Moments m, double mu, NearFieldParams p) : m_(m), mu_(mu), p_(p) {}
+
+MatX NearField::exact_pair(const Vec3& r_vec, double ai, double aj) const {
+  ResistanceScalars s12, s21;
+  tables_.pair_scalars(r_vec.norm(), ai, aj, s12, s21);
+  const PairMatrix R = two_sphere_resistance(r_vec, ai, aj, mu_, s12, s21);
+  const auto idx = level_indices(m_);
+  MatX out(idx.size(), idx.size());
+  for (std::size_t p = 0; p < idx.size(); ++p)
+    for (std::size_t q = 0; q < idx.size(); ++q) out(long(p), long(q)) = R(idx[p], idx[q]);
+  return out;
+}
+
+MatX NearField::pair_block(const Vec3& r_vec_in, double ai, double aj) const {
+  // Regularised gap: evaluate at xi >= min_gap along the line of centres.
+  const double r = r_vec_in.norm(), half = 0.5 * (ai + aj);
+  const double xi = r / half - 2.0;
+  const Vec3 dir = r > 0 ? Vec3(r_vec_in / r) : Vec3::UnitZ();
+  const Vec3 r_vec = xi < p_.min_gap ? Vec3(dir * half * (2.0 + p_.min_gap)) : r_vec_in;
+  const MatX Rex = exact_pair(r_vec, ai, aj);
+  // Two-body far-field mobility of the same pair (sphere i at 0, j at r_vec), inverted.
+  const MatX M2 = dense_mobility({Vec3::Zero(), r_vec}, {ai, aj}, mu_, m_);
+  const MatX Rinf = M2.llt().solve(MatX::Identity(M2.rows(), M2.cols()));
+  return Rex - Rinf;
+}
+
+SparseMatrix NearField::assemble(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain,
+                                 NearFieldStats* stats) const {
+  const int d = dof_per_particle(m_);
+  const double amax = *std::max_element(a.begin(), a.end());
+  const auto pairs = trees::neighbor_pairs(x, a, domain, (p_.cutoff - 2.0) * amax);
+  // Pair blocks in parallel into a buffer, summed serially in pair order (deterministic).
+  std::vector<MatX> blocks(pairs.size());
+  std::vector<char> inside(pairs.size(), 0);
+  NearFieldStats st;
+#pragma omp parallel for schedule(dynamic, 8)
+  for (long k = 0; k < long(pairs.size()); ++k) {
+    const auto& p = pairs[std::size_t(k)];
+    const double ai = a[std::size_t(p.i)], aj = a[std::size_t(p.j)];
+    if (2.0 * p.dist / (ai + aj) >= p_.cutoff) continue;
+    inside[std::size_t(k)] = 1;
+    blocks[std::size_t(k)] = pair_block(-p.r, ai, aj);  // r_vec = x_j - x_i
+  }
+  std::vector<Eigen::Triplet<double>> trip;
+  trip.reserve(pairs.size() * std::size_t(4 * d * d));
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    if (!inside[k]) continue;
+    const auto& p = pairs[k];
+    const double xi = 2.0 * p.dist / (a[std::size_t(p.i)] + a[std::size_t(p.j)]) - 2.0;
+    ++st.pairs;
+    st.regularised += xi < p_.min_gap;
+    st.overlaps += xi < 0;
+    if (xi < st.min_xi) {
+      st.min_xi = xi;
+      st.worst_i = p.i;
+      st.worst_j = p.j;
+    }
+    const MatX& B = blocks[k];
+    const int idx[2] = {p.i, p.j};
+    for (int bi = 0; bi < 2; ++bi)
+      for (int bj = 0; bj < 2; ++bj)
+        for (int u = 0; u < d; ++u)
+          for (int v = 0; v < d; ++v)
+            trip.emplace_back(idx[bi] * d + u, idx[bj] * d + v, B(bi * d + u, bj * d + v));
+  }
+  SparseMatrix R(long(x.size()) * d, long(x.size()) * d);
+  R.setFromTriplets(trip.begin(), trip.end());
+  R.makeCompressed();
+  if (stats) *stats = st;
+  return R;
+}
+
+MatX NearField::assemble_dense(const std::vector<Vec3>& x, const std::vector<double>& a) const {
+  const int d = dof_per_particle(m_);
+  const long n = long(x.size());
+  MatX R = MatX::Zero(n * d, n * d);
+  for (long i = 0; i < n; ++i)
+    for (long j = i + 1; j < n; ++j) {
+      const Vec3 rv = x[std::size_t(j)] - x[std::size_t(i)];
+      const double ai = a[std::size_t(i)], aj = a[std::size_t(j)];
+      if (2.0 * rv.norm() / (ai + aj) >= p_.cutoff) continue;
+      const MatX B = pair_block(rv, ai, aj);
+      R.block(i * d, i * d, d, d) += B.topLeftCorner(d, d);
+      R.block(i * d, j * d, d, d) += B.topRightCorner(d, d);
+      R.block(j * d, i * d, d, d) += B.bottomLeftCorner(d, d);
+      R.block(j * d, j * d, d, d) += B.bottomRightCorner(d, d);
+    }
+  return R;
+}
+
+}  // namespace stokesian::lubrication

@@ -1,0 +1,63 @@
+#pragma once
+// Near-field (lubrication) resistance of Stokesian dynamics (shared/notes/method.md s.3):
+//
+//     R_nf = sum over pairs with s < s_cut of  [ R2B_exact(pair) - R2B_inf(pair) ],
+//
+// R2B_exact: the exact two-sphere resistance at the solve's moment level (F, FT or the full FTS
+//   matrix of lubrication/resistance_functions.hpp; F and FT are principal sub-blocks of FTS,
+//   since with E_inf = 0 the stresslet does not enter the force/torque rows);
+// R2B_inf: the inverse of the engine's own two-body far-field mobility (engine/far_field.hpp) at
+//   the same level, so that for two particles R_inf^{-1} + R_nf = R2B_exact exactly.
+// s = 2 r / (a_i + a_j) is the symmetric separation, xi = s - 2 the symmetric gap (the same for
+// both spheres, so the pair block obeys Newton's third law and the lambda <-> 1/lambda relations).
+// Pairs with xi < xi_min are evaluated at xi_min along their line of centres (regularised
+// minimum gap) and counted; overlaps (xi < 0) are counted separately.
+#include "engine/state.hpp"
+#include "engine/types.hpp"
+#include "lubrication/cholmod_factor.hpp"
+#include "lubrication/resistance_table.hpp"
+
+#include <vector>
+
+namespace stokesian::lubrication {
+
+struct NearFieldParams {
+  double cutoff = 4.0;   // pairs with 2 r / (a_i + a_j) < cutoff (4 = "4 mean radii") [1]
+  double min_gap = 1e-6; // regularised minimum symmetric gap xi_min [1]
+};
+
+struct NearFieldStats {
+  long pairs = 0;                 // pairs inside the cutoff
+  long regularised = 0;           // pairs evaluated at xi_min (including overlaps)
+  long overlaps = 0;              // pairs with xi < 0
+  double min_xi = 1e300;          // smallest symmetric gap seen
+  int worst_i = -1, worst_j = -1; // the pair with the smallest gap
+};
+
+class NearField {
+ public:
+  NearField(Moments m, double mu, NearFieldParams p = {});
+
+  // Sparse R_nf (d N x d N, both triangles stored) over the pairs found by trees::neighbor_pairs.
+  SparseMatrix assemble(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain,
+                        NearFieldStats* stats = nullptr) const;
+  // Reference twin: dense R_nf from an O(N^2) loop over all pairs (open domains).
+  MatX assemble_dense(const std::vector<Vec3>& x, const std::vector<double>& a) const;
+
+  // The 2d x 2d pair block R2B_exact - R2B_inf for sphere i at the origin and sphere j at
+  // r_ij = x_i - x_j... expressed as r_vec = x_j - x_i (pair order i, j).
+  MatX pair_block(const Vec3& r_vec, double ai, double aj) const;
+  // The exact two-sphere resistance at the solve's moment level (2d x 2d).
+  MatX exact_pair(const Vec3& r_vec, double ai, double aj) const;
+
+  const NearFieldParams& params() const { return p_; }
+  Moments moments() const { return m_; }
+
+ private:
+  Moments m_;
+  double mu_;
+  NearFieldParams p_;
+  mutable ResistanceTableCache tables_;
+};
+
+}  // namespace stokesian::lubrication
