@@ -44,6 +44,7 @@
 #include <cmath>
 #include <algorithm>
 #include <cstddef>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <stdexcept>
@@ -188,66 +189,219 @@ class Recurrence {
   std::vector<double> P_, Q_, V_;
 };
 
-// Lambda-independent coefficient arrays a[k][q] = (P or Q)_{n, k-q, q}, k = 0..K.
-struct Coefficients {
-  enum Id { XA_P1, YA_P1, YA_Q1, YC_Q1, XA_P2, YA_P2, YC_P2, XM_P2, YM_P2, ZM_P2, kCount };
-  std::array<std::vector<std::vector<double>>, kCount> a;
-};
+// Lambda-weighted form of the same recurrences (used by ResistanceSeries).  With
+// x = lambda/(1+lambda), y = 1/(1+lambda) define for each array T in {P, Q, V}
+//    Aw[T](n, k) = sum_{p+q=k} x^q y^p T(n, p, q),    Bw[T](n, k) = sum_{p+q=k} x^p y^q T(n, p, q).
+// A term T(s, q-s-i, p-n+j) of the recurrence for (n, p, q) contributes to Aw(n, k)
+//    x^(s+i) y^(n-j) Bw[T](s, k-s-n-i+j)
+// (and symmetrically to Bw with x <-> y, Aw <-> Bw): the two spheres alternate.  The series
+// coefficients are c_k ~ Aw[P](1 or 2, k) and Aw[Q](1, k).  The combined weights binomial *
+// x^(s+i) y^(n-j) are <= 1 + lambda (terms of (x+y)^m up to one factor 1/y), so they are
+// formed in log space and nothing overflows even at order 1000; the cost is O(K^3) per lambda instead of O(K^4).
+class WeightedRecurrence {
+ public:
+  WeightedRecurrence(Kind kind, int n0, bool init_pv, bool init_q, int L, double x, double y)
+      : L_(L) {
+    const bool has_q = kind != Kind::X;
+    for (auto* a : {&AP_, &BP_, &AV_, &BV_}) alloc(*a);
+    if (has_q) {
+      alloc(AQ_);
+      alloc(BQ_);
+    }
+    const int smin = kind == Kind::Z ? 2 : 1;
+    const int bshift = kind == Kind::X ? 0 : (kind == Kind::Y ? 1 : 2);  // C(n+s, n+bshift)
+    std::vector<double> lf(2 * L + 3, 0.0);
+    for (std::size_t m = 1; m < lf.size(); ++m) lf[m] = lf[m - 1] + std::log(double(m));
+    const double lx = std::log(x), ly = std::log(y);
 
-const Coefficients& coefficients() {
-  static Coefficients co;
-  static std::once_flag once;
-  std::call_once(once, [] {
-    const int K = kSeriesOrder;
-    const int L = K + 2;
-    auto extract = [K](const Recurrence& rec, int n, bool q_array) {
-      std::vector<std::vector<double>> out(K + 1);
-      for (int k = 0; k <= K; ++k) {
-        out[k].resize(k + 1);
-        for (int q = 0; q <= k; ++q) out[k][q] = q_array ? rec.Q(n, k - q, q) : rec.P(n, k - q, q);
-      }
-      return out;
+    // A term: rational weight r(n, s), source array, shifts i, j.
+    struct Term {
+      int src;  // 0: P, 1: Q, 2: V
+      int i, j;
+      int dst;  // 0: P, 1: Q, 2: V-correction
     };
-    Coefficients& c = co;
-#pragma omp parallel sections
-    {
-#pragma omp section
-      {
-        Recurrence xa(Kind::X, 1, true, false, L);
-        c.a[Coefficients::XA_P1] = extract(xa, 1, false);
-        c.a[Coefficients::XA_P2] = extract(xa, 2, false);
+    // X type: P <- P(s,q-s,p-n+1), P(s,q-s,p-n-1), V(s,q-s-2,p-n+1); V <- P(s,q-s,p-n-1).
+    static const Term kTermsX[] = {{0, 0, 1, 0}, {0, 0, -1, 0}, {2, 2, 1, 0}, {0, 0, -1, 2}};
+    // Y, Z type: the same plus Q(s,q-s-1,p-n+1) in P; Q <- Q(s,q-s-1,p-n), P(s,q-s,p-n).
+    static const Term kTermsY[] = {{0, 0, 1, 0}, {0, 0, -1, 0}, {2, 2, 1, 0}, {1, 1, 1, 0},
+                                   {1, 1, 0, 1}, {0, 0, 0, 1}, {0, 0, -1, 2}};
+    const Term* terms = kind == Kind::X ? kTermsX : kTermsY;
+    const int nt = kind == Kind::X ? 4 : 7;
+    auto rational = [kind](int t, int n, int s) -> double {
+      const double nn = n, ss = s;
+      if (kind == Kind::X) {
+        switch (t) {
+          case 0: return nn * (2 * nn + 1) * (2 * nn * ss - nn - ss + 2) / (2 * (nn + 1) * (2 * ss - 1) * (nn + ss));
+          case 1: return -nn * (2 * nn - 1) / (2 * (nn + 1));
+          case 2: return -nn * (4 * nn * nn - 1) / (2 * (nn + 1) * (2 * ss + 1));
+          default: return -2 * nn / ((nn + 1) * (2 * nn + 3));
+        }
       }
-#pragma omp section
-      {
-        Recurrence ya(Kind::Y, 1, true, false, L);
-        c.a[Coefficients::YA_P1] = extract(ya, 1, false);
-        c.a[Coefficients::YA_Q1] = extract(ya, 1, true);
-        c.a[Coefficients::YA_P2] = extract(ya, 2, false);
+      if (kind == Kind::Y) {
+        switch (t) {
+          case 0: return (2 * nn + 1) / (2 * (nn + 1)) * (3 * (nn + ss) - (nn * ss + 1) * (2 * nn * ss - ss - nn + 2)) / (ss * (nn + ss) * (2 * ss - 1));
+          case 1: return nn * (2 * nn - 1) / (2 * (nn + 1));
+          case 2: return nn * (4 * nn * nn - 1) / (2 * (nn + 1) * (2 * ss + 1));
+          case 3: return -2 * (4 * nn * nn - 1) / (3 * (nn + 1));
+          case 4: return ss / (nn + 1);
+          case 5: return -3 / (2 * nn * ss * (nn + 1));
+          default: return 2 * nn / ((nn + 1) * (2 * nn + 3));
+        }
       }
-#pragma omp section
-      {
-        Recurrence yc(Kind::Y, 1, false, true, L);
-        c.a[Coefficients::YC_Q1] = extract(yc, 1, true);
-        c.a[Coefficients::YC_P2] = extract(yc, 2, false);
+      switch (t) {
+        case 0: return (2 * nn + 1) / (nn + 1) * (nn * ss * (nn + ss - 2 * nn * ss - 2) - 4 * (2 * nn * ss - 4 * ss - 4 * nn + 2)) / (2 * ss * (nn + ss) * (2 * ss - 1));
+        case 1: return nn * (2 * nn - 1) / (2 * (nn + 1));
+        case 2: return nn * (2 * nn + 1) * (2 * nn - 1) / (2 * (nn + 1) * (2 * ss + 1));
+        case 3: return -2 * (2 * nn + 1) * (2 * nn - 1) / (nn + 1);
+        case 4: return ss / (nn + 1);
+        case 5: return -2 / (nn * ss * (nn + 1));
+        default: return 2 * nn / ((nn + 1) * (2 * nn + 3));
       }
-#pragma omp section
-      {
-        Recurrence xm(Kind::X, 2, true, false, L);
-        c.a[Coefficients::XM_P2] = extract(xm, 2, false);
-      }
-#pragma omp section
-      {
-        Recurrence ym(Kind::Y, 2, true, false, L);
-        c.a[Coefficients::YM_P2] = extract(ym, 2, false);
-      }
-#pragma omp section
-      {
-        Recurrence zm(Kind::Z, 2, true, false, L);
-        c.a[Coefficients::ZM_P2] = extract(zm, 2, false);
+    };
+    // Weight tables wa[t][n][s] (for Aw) and wb[t][n][s] (for Bw), s <= L - n + 1.
+    std::vector<std::vector<std::vector<double>>> wa(nt), wb(nt);
+    for (int t = 0; t < nt; ++t) {
+      wa[t].resize(L + 1);
+      wb[t].resize(L + 1);
+      for (int n = smin; n <= L; ++n) {
+        const int smax = L - n + 1;
+        wa[t][n].assign(smax + 1, 0.0);
+        wb[t][n].assign(smax + 1, 0.0);
+        for (int s = smin; s <= smax; ++s) {
+          const double r = rational(t, n, s);
+          if (r == 0.0) continue;
+          const double lc = lf[n + s] - lf[n + bshift] - lf[s - bshift];
+          const int i = terms[t].i, j = terms[t].j;
+          const double sg = r < 0 ? -1.0 : 1.0, lr = std::log(std::abs(r));
+          wa[t][n][s] = sg * std::exp(lr + lc + (s + i) * lx + (n - j) * ly);
+          wb[t][n][s] = sg * std::exp(lr + lc + (s + i) * ly + (n - j) * lx);
+        }
       }
     }
-  });
-  return co;
+    for (int lev = 0; lev <= L; ++lev) {
+      for (int n = smin; n <= lev; ++n) {
+        const int k = lev - n;
+        if (k == 0) {
+          if (n == n0) {
+            if (init_pv) AP_[lev][n] = BP_[lev][n] = AV_[lev][n] = BV_[lev][n] = 1.0;
+            if (init_q) AQ_[lev][n] = BQ_[lev][n] = 1.0;
+          }
+          continue;
+        }
+        double acc[3][2] = {{0, 0}, {0, 0}, {0, 0}};  // [P, Q, Vcorr][A, B]
+        for (int t = 0; t < nt; ++t) {
+          const Term& tm = terms[t];
+          const int lin = k - n - tm.i + tm.j;  // level of the source entries
+          if (lin < smin) continue;
+          const auto& srcB = tm.src == 0 ? BP_ : (tm.src == 1 ? BQ_ : BV_);
+          const auto& srcA = tm.src == 0 ? AP_ : (tm.src == 1 ? AQ_ : AV_);
+          const double* rb = srcB[lin].data();
+          const double* ra = srcA[lin].data();
+          const double* w1 = wa[t][n].data();
+          const double* w2 = wb[t][n].data();
+          const int top = std::min<int>(lin, static_cast<int>(wa[t][n].size()) - 1);
+          double sa = 0.0, sb = 0.0;
+          for (int s = smin; s <= top; ++s) {
+            sa += w1[s] * rb[s];
+            sb += w2[s] * ra[s];
+          }
+          acc[tm.dst][0] += sa;
+          acc[tm.dst][1] += sb;
+        }
+        AP_[lev][n] = acc[0][0];
+        BP_[lev][n] = acc[0][1];
+        if (has_q) {
+          AQ_[lev][n] = acc[1][0];
+          BQ_[lev][n] = acc[1][1];
+        }
+        AV_[lev][n] = acc[0][0] + acc[2][0];
+        BV_[lev][n] = acc[0][1] + acc[2][1];
+      }
+    }
+  }
+  double AP(int n, int k) const { return n + k <= L_ ? AP_[n + k][n] : 0.0; }
+  double AQ(int n, int k) const { return (!AQ_.empty() && n + k <= L_) ? AQ_[n + k][n] : 0.0; }
+
+ private:
+  void alloc(std::vector<std::vector<double>>& a) {
+    a.resize(L_ + 1);
+    for (int lev = 0; lev <= L_; ++lev) a[lev].assign(lev + 1, 0.0);
+  }
+  int L_;
+  std::vector<std::vector<double>> AP_, BP_, AQ_, BQ_, AV_, BV_;
+};
+
+// Identifiers of the coefficient arrays: (P or Q)_{n, k-q, q} of a problem.
+struct Coefficients {
+  enum Id { XA_P1, YA_P1, YA_Q1, YC_Q1, XA_P2, YA_P2, YC_P2, XM_P2, YM_P2, ZM_P2, kCount };
+};
+
+// Sums sum_q T_{n,k-q,q} x^q y^(k-q), k = 0..K, for every coefficient array, from the
+// lambda-weighted recurrences.
+using LambdaSums = std::array<std::vector<double>, Coefficients::kCount>;
+LambdaSums compute_lambda_sums(double lambda, int K) {
+  const double x = lambda / (1.0 + lambda), y = 1.0 / (1.0 + lambda);
+  const int L = K + 2;
+  std::array<std::vector<double>, Coefficients::kCount> out;
+  for (auto& v : out) v.assign(K + 1, 0.0);
+  auto take = [&](const WeightedRecurrence& w, Coefficients::Id id, int n, bool q) {
+    for (int k = 0; k <= K; ++k) out[id][k] = q ? w.AQ(n, k) : w.AP(n, k);
+  };
+#pragma omp parallel sections
+  {
+#pragma omp section
+    {
+      const WeightedRecurrence xa(Kind::X, 1, true, false, L, x, y);
+      take(xa, Coefficients::XA_P1, 1, false);
+      take(xa, Coefficients::XA_P2, 2, false);
+    }
+#pragma omp section
+    {
+      const WeightedRecurrence ya(Kind::Y, 1, true, false, L, x, y);
+      take(ya, Coefficients::YA_P1, 1, false);
+      take(ya, Coefficients::YA_Q1, 1, true);
+      take(ya, Coefficients::YA_P2, 2, false);
+    }
+#pragma omp section
+    {
+      const WeightedRecurrence yc(Kind::Y, 1, false, true, L, x, y);
+      take(yc, Coefficients::YC_Q1, 1, true);
+      take(yc, Coefficients::YC_P2, 2, false);
+    }
+#pragma omp section
+    {
+      const WeightedRecurrence xm(Kind::X, 2, true, false, L, x, y);
+      take(xm, Coefficients::XM_P2, 2, false);
+    }
+#pragma omp section
+    {
+      const WeightedRecurrence ym(Kind::Y, 2, true, false, L, x, y);
+      take(ym, Coefficients::YM_P2, 2, false);
+    }
+#pragma omp section
+    {
+      const WeightedRecurrence zm(Kind::Z, 2, true, false, L, x, y);
+      take(zm, Coefficients::ZM_P2, 2, false);
+    }
+  }
+  return out;
+}
+
+// Process-wide cache of the sums (a few lambdas are typically used over and over).
+std::shared_ptr<const LambdaSums> lambda_sums(double lambda, int K) {
+  static std::mutex mutex;
+  static std::map<std::pair<double, int>, std::shared_ptr<const LambdaSums>> cache;
+  const auto key = std::make_pair(lambda, K);
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    auto it = cache.find(key);
+    if (it != cache.end()) return it->second;
+  }
+  auto sums = std::make_shared<const LambdaSums>(compute_lambda_sums(lambda, K));
+  std::lock_guard<std::mutex> lock(mutex);
+  if (cache.size() >= 64) cache.erase(cache.begin());
+  cache.emplace(key, sums);
+  return sums;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -329,6 +483,28 @@ struct G3 {
 
 }  // namespace
 
+namespace detail {
+std::vector<double> series_sums(double lambda, int order, int id, bool reference) {
+  if (id < 0 || id >= Coefficients::kCount) throw std::out_of_range("series_sums");
+  if (!reference) return compute_lambda_sums(lambda, order)[id];
+  // Lambda-independent O(K^4) recurrences, evaluated afresh at this order.
+  const Kind kinds[] = {Kind::X, Kind::Y, Kind::Y, Kind::Y, Kind::X,
+                        Kind::Y, Kind::Y, Kind::X, Kind::Y, Kind::Z};
+  const int n0s[] = {1, 1, 1, 1, 1, 1, 1, 2, 2, 2};
+  const bool pvs[] = {true, true, true, false, true, true, false, true, true, true};
+  const int ns[] = {1, 1, 1, 1, 2, 2, 2, 2, 2, 2};
+  const bool qs[] = {false, false, true, true, false, false, false, false, false, false};
+  const Recurrence rec(kinds[id], n0s[id], pvs[id], !pvs[id], order + 2);
+  const double x = lambda / (1.0 + lambda), y = 1.0 / (1.0 + lambda);
+  std::vector<double> out(order + 1, 0.0);
+  for (int k = 0; k <= order; ++k)
+    for (int q = 0; q <= k; ++q)
+      out[k] += (qs[id] ? rec.Q(ns[id], k - q, q) : rec.P(ns[id], k - q, q)) * std::pow(x, q) *
+                std::pow(y, k - q);
+  return out;
+}
+}  // namespace detail
+
 double hurwitz_zeta3(double a) {
   // sum_{n>=0} (n+a)^-3: direct terms, then Euler-Maclaurin tail from n = N.
   double sum = 0.0;
@@ -391,13 +567,23 @@ ResistanceScalars relabel_spheres(const ResistanceScalars& r) {
   return o;
 }
 
-ResistanceSeries::ResistanceSeries(double lambda) : lambda_(lambda) {
+int ResistanceSeries::default_order(double lambda) {
+  const double ratio = std::max(lambda, 1.0 / lambda);
+  if (ratio <= 4.0) return 200;
+  if (ratio <= 16.0) return 400;
+  return 600;
+}
+
+ResistanceSeries::ResistanceSeries(double lambda, int order)
+    : lambda_(lambda), order_(order > 0 ? order : default_order(lambda)) {
   if (!(lambda > 0.0) || !std::isfinite(lambda))
     throw std::invalid_argument("ResistanceSeries: lambda must be positive");
-  const Coefficients& co = coefficients();
+  if (order_ < 20 || order_ > 2000) throw std::invalid_argument("ResistanceSeries: bad order");
+  const std::shared_ptr<const LambdaSums> sums_ptr = lambda_sums(lambda, order_);
+  const LambdaSums& sums = *sums_ptr;
   const double l = lambda, l2 = l * l, l3 = l2 * l, l4 = l3 * l, l5 = l4 * l;
   const double p1 = 1.0 + l, p2 = p1 * p1, p3 = p2 * p1;
-  const int K = kSeriesOrder;
+  const int K = order_;
 
   // Lubrication coefficients of the natural-scale sums (JO84, J92, Townsend 2023).
   const G3 xa{2 * l2 / p3, l * (1 + 7 * l + l2) / (5 * p3),
@@ -446,23 +632,13 @@ ResistanceSeries::ResistanceSeries(double lambda) : lambda_(lambda) {
       {Coefficients::ZM_P2, 1.0, true, 0, zm, zm, -1.0, 3, ZM11},
   };
 
-  // x^q y^(k-q) with x = lambda/(1+lambda), y = 1/(1+lambda): lambda^q / (1+lambda)^k.
-  const double x = l / p1, y = 1.0 / p1;
-  std::vector<double> xp(K + 1), yp(K + 1);
-  xp[0] = yp[0] = 1.0;
-  for (int k = 1; k <= K; ++k) {
-    xp[k] = xp[k - 1] * x;
-    yp[k] = yp[k - 1] * y;
-  }
+  const double x = l / p1;  // lambda/(1+lambda)
 
   for (const Spec& sp : specs) {
-    const auto& a = co.a[sp.arr];
+    // sums[id][k] = sum_q T_{n,k-q,q} lambda^q / (1+lambda)^k
     std::vector<double> c(K + 1, 0.0);
-    for (int k = 0; k <= K; ++k) {
-      double acc = 0.0;
-      for (int q = 0; q <= k; ++q) acc += a[k][q] * xp[q] * yp[k - q];
-      c[k] = sp.pref * acc * ((sp.lam_parity && (k % 2)) ? l : 1.0);
-    }
+    for (int k = 0; k <= K; ++k)
+      c[k] = sp.pref * sums[sp.arr][k] * ((sp.lam_parity && (k % 2)) ? l : 1.0);
     for (int which = 0; which < 2; ++which) {
       Function& f = fn_[sp.slot11 + which];
       f.parity = which == 0 ? sp.parity11 : 1 - sp.parity11;
@@ -508,7 +684,7 @@ ResistanceSeries::ResistanceSeries(double lambda) : lambda_(lambda) {
 double ResistanceSeries::series_value(const Function& f, double xi, bool resum) const {
   const double s = 2.0 + xi;
   const double t = 2.0 / s;
-  const int K = kSeriesOrder;
+  const int K = order_;
   // Horner in t^2 over the entries of the right parity.
   const double t2 = t * t;
   const std::vector<double>& a = resum ? f.r : f.c;

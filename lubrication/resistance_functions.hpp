@@ -80,20 +80,17 @@ struct NearContactForm {
   double operator()(double xi) const;
 };
 
-/// Order (highest power of 1/s) of the twin-multipole series.
-#ifndef STOKESIAN_LUB_SERIES_ORDER
-#define STOKESIAN_LUB_SERIES_ORDER 200
-#endif
-inline constexpr int kSeriesOrder = STOKESIAN_LUB_SERIES_ORDER;
-
 /// All resistance functions for one size ratio lambda = a2/a1 (0 < lambda; tested for
-/// 0.01 <= lambda <= 100).  Construction costs ~0.2 ms once the lambda-independent recurrence
-/// coefficients exist; these are computed on first use (1-7 s) and shared by all instances.
+/// 0.01 <= lambda <= 100).  The series order K (highest power of 1/s) defaults to
+/// default_order(lambda): 200 for max(lambda, 1/lambda) <= 4, 400 up to 16, 600 beyond
+/// (construction ~0.06 s, 0.5 s, 2 s: lambda-weighted recurrences, O(K^3)).
 class ResistanceSeries {
  public:
-  explicit ResistanceSeries(double lambda);
+  explicit ResistanceSeries(double lambda, int order = 0);
+  static int default_order(double lambda);
 
   double lambda() const { return lambda_; }
+  int order() const { return order_; }
 
   /// All 22 scalars at gap xi = s - 2 > 0 (use this form near contact to avoid losing digits
   /// of xi in s).
@@ -119,7 +116,7 @@ class ResistanceSeries {
 
  private:
   struct Function {
-    std::vector<double> c;  // c_k, k = 0..kSeriesOrder (zero for the wrong parity)
+    std::vector<double> c;  // c_k, k = 0..order (zero for the wrong parity)
     std::vector<double> r;  // c_k - asymptotic part a_k
     int parity = 0;         // 0: even powers, 1: odd powers
     double g1 = 0, g2 = 0, g3 = 0;  // asymptotic a_k = g1 + 2 g2/k - 4 g3/(k(k+2))
@@ -129,6 +126,7 @@ class ResistanceSeries {
   void xc_values(double xi, double& xc11, double& xc12) const;
 
   double lambda_;
+  int order_;
   std::array<Function, kNumScalars> fn_{};  // XC entries unused
   std::array<NearContactForm, kNumScalars> near_{};
 };
@@ -155,6 +153,14 @@ PairMatrix two_sphere_resistance(const Eigen::Vector3d& r_vec, double a1, double
 PairMatrix two_sphere_resistance(const Eigen::Vector3d& r_vec, double a1, double a2, double mu,
                                  const ResistanceScalars& s11_12,
                                  const ResistanceScalars& s22_21);
+
+namespace detail {
+/// Sums sum_q T_{n,k-q,q} lambda^q/(1+lambda)^k, k = 0..order, of coefficient array id
+/// (0..9: XA P1, YA P1, YA Q1, YC Q1, XA P2, YA P2, YC P2, XM P2, YM P2, ZM P2), from the
+/// lambda-weighted recurrences (reference = false, used by ResistanceSeries) or from the
+/// lambda-independent O(K^4) recurrences (reference = true; for tests only).
+std::vector<double> series_sums(double lambda, int order, int id, bool reference);
+}  // namespace detail
 
 /// Hurwitz zeta(3, a) for a > 0 (used for the X^C contact values).
 double hurwitz_zeta3(double a);

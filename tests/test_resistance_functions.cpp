@@ -154,9 +154,10 @@ TEST_CASE("mid-field values against Wilson's Lamb's-method solver [W13]") {
 TEST_CASE("near-contact forms against Townsend's corrected asymptotics [T23]") {
   // lambda = 0.1, xi = 1e-5 (s' = 2.00001), file row gamma = 0 ("11") and 1 ("12").
   // Both sides evaluate g1/xi + g2 ln(1/xi) + A + g3 xi ln(1/xi) with the same recurrences;
-  // [T23] truncates the constant's series at 100-200 terms (we at 200), so the O(1)
-  // constants differ by up to ~1e-4 absolute (1e-3 for the slowly converging Y^M_12,
-  // 5e-3 relative).  Tolerance: 2e-4 relative for all but Y^M_12 (1e-2) and Y^C_12 (1e-3).
+  // [T23] truncates the constant's series at 100-200 terms (we at 400 for lambda = 0.1),
+  // so the O(1) constants differ by up to ~1e-4 absolute (1e-3 for the slowly converging
+  // Y^M_12, 5e-3 relative).  Tolerance: 2e-4 relative for all but Y^M_12 (1e-2), Y^C_12
+  // (1e-3) and Z^M_12 (2e-3; observed 7e-4).
   const double lambda = 0.1, xi = 1e-5;
   const double T11[11] = {1503.9651715848795, 1.4759506887361085, -0.4929744615421805,
                           1.3342862212427082, 1.8493199384534003, 1503.0360549524912,
@@ -175,6 +176,7 @@ TEST_CASE("near-contact forms against Townsend's corrected asymptotics [T23]") {
     double tol12 = 2e-4;
     if (j == 4) tol12 = 1e-3;
     if (j == 9) tol12 = 1e-2;
+    if (j == 10) tol12 = 2e-3;  // [T23] sums Z^M_12 to 200 terms, we to 400 at lambda = 0.1
     const std::string name = scalar_name(2 * j);
     CAPTURE(name);
     CHECK(rel_err(scalar_at(n, 2 * j), conv[j] * T11[j]) < 2e-4);
@@ -197,7 +199,7 @@ TEST_CASE("series coefficients approach the published lubrication coefficients")
       const NearContactForm& g = rs.near_contact()[i];
       const double bound = 0.1 * (std::abs(g.g1) + 2 * std::abs(g.g2) + 4 * std::abs(g.g3)) / f;
       double worst = 0.0;
-      for (int k = kSeriesOrder - 20; k <= kSeriesOrder; ++k)
+      for (int k = rs.order() - 20; k <= rs.order(); ++k)
         worst = std::max(worst, std::abs(rs.remainder(i, k)) * k);
       CAPTURE(lambda);
       const std::string name = scalar_name(i);
@@ -453,4 +455,24 @@ TEST_CASE("table cache returns 11/12 and 22/21 scalars of a pair") {
     CHECK(std::abs(scalar_at(q, i) - scalar_at(dq, i)) <= 1e-7 * std::abs(scalar_at(dq, i)) + 1e-12);
   }
   CHECK(&cache.get(a2 / a1) == &cache.get(a2 / a1));  // one table per lambda
+}
+
+TEST_CASE("lambda-weighted recurrences reproduce the lambda-independent ones") {
+  // The production path sums the recurrences with weights x^q y^p (O(K^3) per lambda); the
+  // reference path computes every P_npq, Q_npq (O(K^4)) and sums afterwards.  Same numbers
+  // in exact arithmetic; in double they differ by rounding (weights formed via exp/log,
+  // ~1e-14 each), observed <= 3e-12 relative at order 60, hence 1e-10.
+  for (double l : {0.05, 1.0, 7.0})
+    for (int id = 0; id < 10; ++id) {
+      const std::vector<double> a = detail::series_sums(l, 60, id, false);
+      const std::vector<double> b = detail::series_sums(l, 60, id, true);
+      double scale = 0.0;
+      for (double v : b) scale = std::max(scale, std::abs(v));
+      for (std::size_t k = 0; k < a.size(); ++k) {
+        CAPTURE(l);
+        CAPTURE(id);
+        CAPTURE(k);
+        CHECK(std::abs(a[k] - b[k]) <= 1e-10 * std::abs(b[k]) + 1e-14 * scale);
+      }
+    }
 }
