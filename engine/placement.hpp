@@ -1,7 +1,7 @@
 #pragma once
 // Initial configurations generated from a target volume fraction.
-//   random:  random sequential addition of non-overlapping spheres (largest first), uniform in the
-//            box; fails with a clear error when the jamming limit of RSA (phi ~ 0.38) is approached.
+//   random:  uniform random centres, then overlaps removed by sweeps of pairwise separation along
+//            the lines of centres (cell-list neighbour search, O(N) per sweep); reaches phi ~ 0.6.
 //   lattice: simple cubic lattice of spacing (4 pi a_mean^3 / (3 phi))^(1/3) (radii may still
 //            differ; overlapping draws are rejected).
 // Radii: monodisperse a; bidisperse a and ratio*a with number fraction f of the large ones;
