@@ -5,8 +5,21 @@
 
 namespace stokesian::ewald {
 
-void interpolate(const GridGeometry& g, const ParticleWindows& win, Moments m, const std::vector<double*>& grids,
-                 VecX& out) {
+namespace {
+// Window sum for one particle with the field count D known at compile time (unrolled inner loop).
+template <int D>
+void gather(long P3, const long* idx, const double* wF, const double* wT, const double* grid, double* acc) {
+  for (int c = 0; c < D; ++c) acc[c] = 0.0;
+  for (long t = 0; t < P3; ++t) {
+    const double* v = grid + idx[t] * D;
+    const double wf = wF[t], wt = wT[t];
+    for (int c = 0; c < 3; ++c) acc[c] += v[c] * wf;
+    for (int c = 3; c < D; ++c) acc[c] += v[c] * wt;
+  }
+}
+}  // namespace
+
+void interpolate(const GridGeometry& g, const ParticleWindows& win, Moments m, const double* grid, VecX& out) {
   const int d = dof_per_particle(m);
   const long n = long(win.start.size());
   const long P3 = long(g.P) * g.P * g.P;
@@ -19,13 +32,10 @@ void interpolate(const GridGeometry& g, const ParticleWindows& win, Moments m, c
     for (long p = 0; p < n; ++p) {
       window_weights(g, win, p, wF.data(), wT.data());
       window_indices(g, win, p, idx.data());
-      for (int c = 0; c < d; ++c) {
-        const double* w = c < 3 ? wF.data() : wT.data();
-        const double* grid = grids[c];
-        double sum = 0.0;
-        for (long t = 0; t < P3; ++t) sum += grid[idx[t]] * w[t];
-        out[p * d + c] = sum;
-      }
+      double* acc = out.data() + p * d;
+      if (d == 3) gather<3>(P3, idx.data(), wF.data(), wT.data(), grid, acc);
+      else if (d == 6) gather<6>(P3, idx.data(), wF.data(), wT.data(), grid, acc);
+      else gather<11>(P3, idx.data(), wF.data(), wT.data(), grid, acc);
     }
   }
 }

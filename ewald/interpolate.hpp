@@ -11,8 +11,7 @@
 
 namespace stokesian::ewald {
 
-// out (size N d) is overwritten; grids[c] hold g.points() doubles for c < dof_per_particle(m).
-void interpolate(const GridGeometry& g, const ParticleWindows& win, Moments m, const std::vector<double*>& grids,
-                 VecX& out);
+// out (size N d) is overwritten; grid interleaved as in spread.hpp.
+void interpolate(const GridGeometry& g, const ParticleWindows& win, Moments m, const double* grid, VecX& out);
 
 }  // namespace stokesian::ewald

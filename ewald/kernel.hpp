@@ -18,8 +18,9 @@
 
 namespace stokesian::ewald {
 
-// fields[c] hold M0 * M1 * (M2/2 + 1) complex values (FFTW r2c layout), c < dof_per_particle(m).
+// fields: M0 * M1 * (M2/2 + 1) points (FFTW r2c layout) times d = dof_per_particle(m) values,
+// interleaved (field c at point i: fields[i * d + c]).
 void apply_fourier_kernel(const GridGeometry& g, const Lattice& lattice, double xi, double mu, Moments m,
-                          const std::vector<std::complex<double>*>& fields);
+                          std::complex<double>* fields);
 
 }  // namespace stokesian::ewald

@@ -16,16 +16,18 @@
 namespace stokesian::ewald {
 
 // FFTW plans (made once per grid, FFTW_ESTIMATE so the plan -- hence the result -- does not depend
-// on timing) and the work arrays, one real and one complex array per field.
+// on timing) and the work arrays. The d fields are interleaved (spread.hpp); one strided plan
+// transforms one field and is executed for each field offset c (FFTW_UNALIGNED permits the offset
+// arrays), the d transforms running on different threads.
 struct PmeFarField::Fft {
   fftw_plan forward = nullptr, backward = nullptr;
-  std::vector<double*> real;
-  std::vector<std::complex<double>*> spectral;
+  double* real = nullptr;
+  std::complex<double>* spectral = nullptr;
   ~Fft() {
-    for (double* p : real) fftw_free(p);
-    for (auto* p : spectral) fftw_free(p);
     if (forward) fftw_destroy_plan(forward);
     if (backward) fftw_destroy_plan(backward);
+    fftw_free(real);
+    fftw_free(spectral);
   }
 };
 
@@ -48,19 +50,12 @@ PmeFarField::PmeFarField(const std::vector<Vec3>& x, const std::vector<double>& 
   windows_ = make_windows(grid_, s, a);
   colouring_ = colour_slabs(grid_, windows_);
 
-  // Real-space pairs and their scalars (both directions: radii may differ).
+  // Real-space pairs (minimum image, Lees-Edwards aware).
+  radius_ = a;
   const auto pairs = trees::neighbor_pairs(x, a, domain, p_.cutoff_gap);
   pairs_.resize(pairs.size());
-#pragma omp parallel for schedule(dynamic, 64)
-  for (long q = 0; q < long(pairs.size()); ++q) {
-    const auto& np = pairs[q];
-    Pair& pr = pairs_[q];
-    pr.i = np.i;
-    pr.j = np.j;
-    pr.e = np.r / np.dist;
-    pr.ij = real_scalars(a[np.i], a[np.j], np.dist, p_.xi, mu, m);
-    pr.ji = real_scalars(a[np.j], a[np.i], np.dist, p_.xi, mu, m);
-  }
+  for (std::size_t q = 0; q < pairs.size(); ++q)
+    pairs_[q] = Pair{pairs[q].i, pairs[q].j, pairs[q].r / pairs[q].dist, pairs[q].dist};
   pair_start_.assign(n_ + 1, 0);
   for (const Pair& pr : pairs_) {
     ++pair_start_[pr.i + 1];
@@ -72,6 +67,13 @@ PmeFarField::PmeFarField(const std::vector<Vec3>& x, const std::vector<double>& 
   for (int q = 0; q < int(pairs_.size()); ++q) {
     pair_list_[fill[pairs_[q].i]++] = 2 * q;
     pair_list_[fill[pairs_[q].j]++] = 2 * q + 1;
+  }
+  if (pair_list_.size() * sizeof(PairScalars) <= kCacheBytes) {
+    std::vector<PairScalars> cache(pair_list_.size());
+#pragma omp parallel for schedule(dynamic, 64)
+    for (long i = 0; i < n_; ++i)
+      for (int t = pair_start_[i]; t < pair_start_[i + 1]; ++t) cache[t] = entry_scalars(i, t);
+    cache_ = std::move(cache);
   }
   self_F_.resize(n_);
   self_T_.resize(n_);
@@ -87,14 +89,14 @@ PmeFarField::PmeFarField(const std::vector<Vec3>& x, const std::vector<double>& 
   fft_ = std::make_unique<Fft>();
   const int d = dof_per_particle(m);
   const long npts = grid_.points(), nspec = long(grid_.M[0]) * grid_.M[1] * (grid_.M[2] / 2 + 1);
-  for (int c = 0; c < d; ++c) {
-    fft_->real.push_back(static_cast<double*>(fftw_malloc(sizeof(double) * npts)));
-    fft_->spectral.push_back(static_cast<std::complex<double>*>(fftw_malloc(sizeof(fftw_complex) * nspec)));
-    if (!fft_->real.back() || !fft_->spectral.back()) throw std::bad_alloc();
-  }
-  auto* c0 = reinterpret_cast<fftw_complex*>(fft_->spectral[0]);
-  fft_->forward = fftw_plan_dft_r2c_3d(grid_.M[0], grid_.M[1], grid_.M[2], fft_->real[0], c0, FFTW_ESTIMATE);
-  fft_->backward = fftw_plan_dft_c2r_3d(grid_.M[0], grid_.M[1], grid_.M[2], c0, fft_->real[0], FFTW_ESTIMATE);
+  fft_->real = static_cast<double*>(fftw_malloc(sizeof(double) * npts * d));
+  fft_->spectral = static_cast<std::complex<double>*>(fftw_malloc(sizeof(fftw_complex) * nspec * d));
+  if (!fft_->real || !fft_->spectral) throw std::bad_alloc();
+  auto* spec = reinterpret_cast<fftw_complex*>(fft_->spectral);
+  const int dims[3] = {grid_.M[0], grid_.M[1], grid_.M[2]};
+  const unsigned flags = FFTW_ESTIMATE | FFTW_UNALIGNED;
+  fft_->forward = fftw_plan_many_dft_r2c(3, dims, 1, fft_->real, nullptr, d, 1, spec, nullptr, d, 1, flags);
+  fft_->backward = fftw_plan_many_dft_c2r(3, dims, 1, spec, nullptr, d, 1, fft_->real, nullptr, d, 1, flags);
   if (!fft_->forward || !fft_->backward) throw std::runtime_error("PmeFarField: FFTW planning failed");
 }
 
@@ -103,15 +105,21 @@ PmeFarField::~PmeFarField() = default;
 void PmeFarField::apply_wave(const VecX& in, VecX& out) const {
   const int d = dof_per_particle(m_);
   spread(grid_, windows_, colouring_, m_, in, fft_->real);
+  auto* spec = reinterpret_cast<fftw_complex*>(fft_->spectral);
   // The d transforms are independent: one per thread (fftw_execute_* is thread-safe).
 #pragma omp parallel for schedule(static)
-  for (int c = 0; c < d; ++c)
-    fftw_execute_dft_r2c(fft_->forward, fft_->real[c], reinterpret_cast<fftw_complex*>(fft_->spectral[c]));
+  for (int c = 0; c < d; ++c) fftw_execute_dft_r2c(fft_->forward, fft_->real + c, spec + c);
   apply_fourier_kernel(grid_, lattice_, p_.xi, mu_, m_, fft_->spectral);
 #pragma omp parallel for schedule(static)
-  for (int c = 0; c < d; ++c)
-    fftw_execute_dft_c2r(fft_->backward, reinterpret_cast<fftw_complex*>(fft_->spectral[c]), fft_->real[c]);
+  for (int c = 0; c < d; ++c) fftw_execute_dft_c2r(fft_->backward, spec + c, fft_->real + c);
   interpolate(grid_, windows_, m_, fft_->real, out);
+}
+
+PairScalars PmeFarField::entry_scalars(long i, int t) const {
+  if (!cache_.empty()) return cache_[t];
+  const Pair& pr = pairs_[pair_list_[t] / 2];
+  const long j = pair_list_[t] % 2 == 0 ? pr.j : pr.i;
+  return real_scalars(radius_[i], radius_[j], pr.dist, p_.xi, mu_, m_);
 }
 
 void PmeFarField::apply_real(const VecX& in, VecX& out) const {
@@ -129,10 +137,9 @@ void PmeFarField::apply_real(const VecX& in, VecX& out) const {
       for (int c = 6; c < 11; ++c) yi[c] += self_S_[i] * xi[c];
     for (int t = pair_start_[i]; t < pair_start_[i + 1]; ++t) {
       const Pair& pr = pairs_[pair_list_[t] / 2];
-      if (pair_list_[t] % 2 == 0)
-        mobility::apply_pair(pr.ij, pr.e, m_, in.data() + long(pr.j) * d, yi);
-      else
-        mobility::apply_pair(pr.ji, Vec3(-pr.e), m_, in.data() + long(pr.i) * d, yi);
+      const bool first = pair_list_[t] % 2 == 0;  // i is the pair's first particle
+      const long j = first ? pr.j : pr.i;
+      mobility::apply_pair(entry_scalars(i, t), first ? pr.e : Vec3(-pr.e), m_, in.data() + j * d, yi);
     }
   }
 }

@@ -51,9 +51,11 @@ class PmeFarField final : public FarFieldOperator {
  private:
   struct Pair {
     int i, j;
-    Vec3 e;                           // (x_i - x_j) / |x_i - x_j|, minimum image
-    mobility::PairScalars ij, ji;     // response at i from j, response at j from i
+    Vec3 e;       // (x_i - x_j) / |x_i - x_j|, minimum image
+    double dist;  // |x_i - x_j|
   };
+  // Real-space scalars of entry t of particle i's neighbour list (cached or computed).
+  mobility::PairScalars entry_scalars(long i, int t) const;
   struct Fft;
   long n_;
   double mu_;
@@ -66,6 +68,10 @@ class PmeFarField final : public FarFieldOperator {
   std::vector<Pair> pairs_;
   std::vector<int> pair_start_, pair_list_;  // CSR: entries of particle i, 2*pair + (role)
   std::vector<double> self_F_, self_T_, self_S_;
+  std::vector<double> radius_;
+  // Scalars per neighbour-list entry, kept when they fit in kCacheBytes; else computed per apply.
+  std::vector<mobility::PairScalars> cache_;
+  static constexpr std::size_t kCacheBytes = std::size_t(128) << 20;
   std::unique_ptr<Fft> fft_;
 };
 

@@ -25,6 +25,14 @@ int fft_size(int n) {
 
 PmeParameters pme_parameters(double tol, const Lattice& lattice, int n, double a_min, double a_max, Moments m,
                              const PmeOptions& opt) {
+  if (opt.neighbours <= 0.0) {
+    // Automatic cost balance: P hardly depends on the cutoff, so one trial fixes it.
+    PmeOptions trial = opt;
+    trial.neighbours = 200.0;
+    const int P = pme_parameters(tol, lattice, n, a_min, a_max, m, trial).support;
+    trial.neighbours = std::clamp(P * P * P / 8.0, 50.0, 400.0);
+    return pme_parameters(tol, lattice, n, a_min, a_max, m, trial);
+  }
   if (!(tol >= 1e-14 && tol <= 0.1)) throw std::invalid_argument("pme_parameters: tolerance outside [1e-14, 0.1]");
   PmeParameters p;
   p.tolerance = tol;
@@ -80,9 +88,19 @@ PmeParameters pme_parameters(double tol, const Lattice& lattice, int n, double a
   const double b2 = opt.beta * opt.beta;
   const double t = b2 * La * (1.0 - std::sqrt(1.0 - 1.0 / b2));
   p.width = std::sqrt(t) / kPi;
-  // Truncation at P points, with the same margin (measured: the Faxen Laplacian of the window at
-  // the edge does not dominate, P + 1 changes the error by < 1%).
-  p.support = std::max(3, int(std::ceil(2.0 * p.width * std::sqrt(2.0 * La))));
+  // Truncation at P points: one window per particle, so no sum over modes; the Faxen Laplacian
+  // term of the window, c lap W ~ (a^2/6) Gt_dd (delta / s^2)^2 W, raises the edge value.
+  const Mat3 metric = lattice.Ainv * lattice.Ainv.transpose();
+  double g_max = 0.0;
+  for (int d = 0; d < 3; ++d) g_max = std::max(g_max, metric(d, d) * p.grid[d] * p.grid[d]);
+  const double Lt0 = L + std::log(share) + std::log(10.0);
+  double Lt = Lt0;
+  for (int it = 0; it < 3; ++it) {
+    const double half = p.width * std::sqrt(2.0 * Lt);  // (P/2) for this Lt
+    const double edge = 1.0 + a_max * a_max / 6.0 * g_max * half * half / std::pow(p.width, 4);
+    Lt = Lt0 + std::log(edge);
+  }
+  p.support = std::max(3, int(std::ceil(2.0 * p.width * std::sqrt(2.0 * Lt))));
   return p;
 }
 

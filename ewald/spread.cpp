@@ -5,6 +5,18 @@
 #include <cstring>
 
 namespace stokesian::ewald {
+namespace {
+// Window update for one particle with the field count D known at compile time.
+template <int D>
+void scatter(long P3, const long* idx, const double* wF, const double* wT, const double* q, double* grid) {
+  for (long t = 0; t < P3; ++t) {
+    double* v = grid + idx[t] * D;
+    const double wf = wF[t], wt = wT[t];
+    for (int c = 0; c < 3; ++c) v[c] += q[c] * wf;
+    for (int c = 3; c < D; ++c) v[c] += q[c] * wt;
+  }
+}
+}  // namespace
 
 SlabColouring colour_slabs(const GridGeometry& g, const ParticleWindows& win) {
   SlabColouring c;
@@ -33,11 +45,11 @@ void window_indices(const GridGeometry& g, const ParticleWindows& win, long p, l
 }
 
 void spread(const GridGeometry& g, const ParticleWindows& win, const SlabColouring& colouring, Moments m,
-            const VecX& in, const std::vector<double*>& grids) {
+            const VecX& in, double* grid) {
   const int d = dof_per_particle(m);
   const long npts = g.points();
   const long P3 = long(g.P) * g.P * g.P;
-  for (int c = 0; c < d; ++c) std::memset(grids[c], 0, sizeof(double) * npts);
+  std::memset(grid, 0, sizeof(double) * npts * d);
   const int phases = colouring.slabs >= 2 ? 2 : 1;
   for (int phase = 0; phase < phases; ++phase) {
 #pragma omp parallel
@@ -49,14 +61,10 @@ void spread(const GridGeometry& g, const ParticleWindows& win, const SlabColouri
         for (long p : colouring.members[slab]) {
           window_weights(g, win, p, wF.data(), wT.data());
           window_indices(g, win, p, idx.data());
-          const double* x = in.data() + p * d;
-          for (int c = 0; c < d; ++c) {
-            const double q = x[c];
-            if (q == 0.0) continue;
-            const double* w = c < 3 ? wF.data() : wT.data();
-            double* grid = grids[c];
-            for (long t = 0; t < P3; ++t) grid[idx[t]] += q * w[t];
-          }
+          const double* q = in.data() + p * d;
+          if (d == 3) scatter<3>(P3, idx.data(), wF.data(), wT.data(), q, grid);
+          else if (d == 6) scatter<6>(P3, idx.data(), wF.data(), wT.data(), q, grid);
+          else scatter<11>(P3, idx.data(), wF.data(), wT.data(), q, grid);
         }
       }
     }

@@ -24,9 +24,10 @@ struct SlabColouring {
 };
 SlabColouring colour_slabs(const GridGeometry& g, const ParticleWindows& win);
 
-// grids[c] (c < dof_per_particle(m)) must hold g.points() doubles; they are overwritten.
+// grid: g.points() * d doubles, interleaved (value of field c at point i is grid[i * d + c],
+// d = dof_per_particle(m)), so one window point updates d adjacent values; overwritten.
 void spread(const GridGeometry& g, const ParticleWindows& win, const SlabColouring& colouring, Moments m,
-            const VecX& in, const std::vector<double*>& grids);
+            const VecX& in, double* grid);
 
 // The P^3 grid indices of particle p's window (row-major over j0, j1, j2), wrapped.
 void window_indices(const GridGeometry& g, const ParticleWindows& win, long p, long* idx);
