@@ -2,8 +2,8 @@
 // Ewald-summed periodic grand mobility, dense: the oracle for the PME far field.
 //
 // M = sum over lattice images of the real-space blocks + (1/V) sum_{k != 0} of the wave blocks
-// + self correction, exactly as in ewald/ewald_split.hpp [Beenakker 1986, eqs. 6-10; Brady,
-// Phillips, Lester & Bossis 1988, eqs. 2.13-2.16]. The k = 0 term is dropped: the mean pressure
+// + self correction, exactly as in ewald/ewald_split.hpp [docs/ewald.md (E6); cf. Beenakker 1986;
+// Brady, Phillips, Lester & Bossis 1988]. The k = 0 term is dropped: the mean pressure
 // gradient balances the net force on the suspension. Lees-Edwards: the images sit at
 // n1 a1 + n2 a2 + n3 a3 with a2 = (gamma Ly, Ly, 0) and the wave vectors at k = B n
 // (ewald/lattice.hpp). Both sums are taken to |r| < tail / xi and |k| < 2 xi tail, where every

@@ -6,7 +6,7 @@
 // For separated spheres only the truncated Faxen factors matter: g -> P(k) = 1 - w a^2 k^2 with
 // w = 1/6 (force kind) or 1/10 (torque/stresslet kind), so the pair polynomial is
 //     P_alpha P_beta = 1 - c1 k^2 + c2 k^4,   c1 = w_a a_a^2 + w_b a_b^2,  c2 = w_a a_a^2 w_b a_b^2.
-// The wave part multiplies it by Hasimoto's function [Hasimoto 1959; Beenakker 1986, eq. 8]
+// The wave part multiplies it by Hasimoto's splitting function [Hasimoto 1959; docs/ewald.md (E3)]
 //     H(k) = (1 + k^2 / (4 xi^2)) exp(-k^2 / (4 xi^2)),
 // and the real part is the rest. In real space (8 pi mu times Psi, derived with sympy; the
 // derivation is reproduced in docs/ewald.md s.2):
@@ -20,8 +20,9 @@
 // (no cancellation), and at r = 0 they give the self wave term, which equals the k-integrals
 //     UF: (1/(3 pi^2 mu)) int P_F^2 H dk,  OmegaT: (1/(12 pi^2 mu)) int k^2 P_T^2 H dk,
 //     ES: (1/(10 pi^2 mu)) int k^2 P_T^2 H dk   (tested).
-// Periodic grand mobility [Beenakker 1986, eqs. 6-10; Brady, Phillips, Lester & Bossis 1988,
-// eqs. 2.13-2.16 for the FTS blocks]:
+// Periodic grand mobility [docs/ewald.md (E6); the same construction as Beenakker 1986 (RPY) and
+// Brady, Phillips, Lester & Bossis 1988 (FTS), whose splitting polynomial in H differs from ours,
+// so their separate real, wave and self parts differ while the sums agree]:
 //     M_ab = sum_images real(x_a - x_b + n) + (1/V) sum_{k != 0} R_a(k) G(k) R_b(k)^+ e^{ik.(x_a - x_b)}
 //            + d_ab (M_self_free - wave(r = 0)),
 // with G(k) = H(k) (I - kk/k^2) / (mu k^2) and R_a(k) the per-particle response operator

@@ -6,7 +6,8 @@
 //     f = F + (i/2) k x T - i S k                       (sources of ewald_split.hpp)
 // and the velocity u = H(k) / (mu V k^2 W^(n)^2) (I - k k / k^2) f, with H the Hasimoto factor and
 // W^ the window transform (window.hpp; dividing by W^2 undoes spreading and interpolation)
-// [Beenakker 1986, eq. 9; Lindbo & Tornberg 2010, eq. 3.11]. Output, in place:
+// [docs/ewald.md (E8); the deconvolution is that of the spectral Ewald method, Lindbo & Tornberg
+// 2010]. Output, in place:
 //     U = u,  Omega = (i/2) k x u,  E_m = i (B_m k) . u    (B_m: symmetric-traceless basis).
 // The k = 0 term is zero (mean pressure gradient balances the net force). Nyquist planes are zeroed:
 // the grid is oversampled (pme_parameters.hpp), so H is below the tolerance there.

@@ -3,7 +3,7 @@
 // ewald_reference.hpp (Hasimoto split, truncated Faxen factors in the wave part, exact
 // overlap-regularised kernel kept in the real part).
 //
-// Product, per call [Sierou & Brady 2001, s.3; Lindbo & Tornberg 2010, s.3]:
+// Product, per call [docs/ewald.md s.3; cf. Sierou & Brady 2001; Lindbo & Tornberg 2010]:
 //   wave part: spread F, T, S with the Gaussian window + Faxen Laplacian (spread.hpp), FFTW r2c,
 //              multiply by the Fourier kernel (kernel.hpp), FFTW c2r, interpolate U, Omega, E
 //              (interpolate.hpp);

@@ -1,27 +1,31 @@
 #pragma once
-// PME parameters from one tolerance: the only place where accuracy is turned into numbers.
+// PME parameters from one tolerance: the only place where accuracy is turned into numbers
+// (docs/ewald.md s.4 derives each line; s.5 has the measured errors).
 //
-// Error sources and the choice that bounds each by about tol (L_eps = ln(1 / tol) + margin):
-//  1. Real-space truncation. The real part of Psi decays like erfc(xi r) and exp(-xi^2 r^2)
-//     (ewald_split.hpp), so pairs farther than r_c contribute ~ exp(-xi^2 r_c^2): xi = sqrt(L_eps) / r_c,
-//     with r_c the smallest centre distance a neglected pair can have.
-//  2. Wave-space truncation. The Hasimoto factor (1 + q) exp(-q), q = k^2 / (4 xi^2), is below tol for
-//     k > k_max; the grid must hold |n_d| <= n_max,d = k_max |a_d| / (2 pi) in every lattice
-//     direction, times an oversampling factor beta: M_d >= 2 beta n_max,d.
-//  3. Window aliasing. The Gaussian window w(delta) = exp(-delta^2 / (2 s^2)) (delta in grid units)
-//     has transform exp(-2 pi^2 s^2 nu^2) (nu = n / M); the alias from n - M relative to n is
-//     exp(-2 pi^2 s^2 (1 - 2 nu)), weighted by the kernel exp(-L_eps (2 beta nu)^2). The worst nu
-//     gives the bound 2 t - t^2 / (beta^2 L_eps) >= L_eps with t = pi^2 s^2, smallest for
-//     t = beta^2 L_eps (1 - sqrt(1 - 1 / beta^2)) (Lindbo & Tornberg 2010, s.4, give the same trade-off
-//     in their notation m, P).
-//  4. Window truncation at P points: exp(-(P/2)^2 / (2 s^2)) <= tol, P = 2 s sqrt(2 L_eps).
+// With L = ln(10 / tol) (one factor 10 of safety for sums over particles):
+//  1. Real-space cutoff r_c (gap): about `neighbours` particles inside at the mean density, bounded
+//     by the minimum-image contract of trees::neighbor_pairs (r_c + 2 a_max <= L_min / 2).
+//  2. Splitting xi: the smallest value for which every real-space scalar of a neglected pair, at the
+//     closest distance r_c + a_i + a_j, is below e^{-L} times the smallest self mobility (E9). The
+//     scalars themselves are evaluated because their polynomial prefactors (up to (xi a)^3 x^4 e^{-x^2})
+//     depend on the radii and the moments.
+//  3. Wave-space truncation: the Hasimoto factor (1 + q) e^{-q}, q = k^2 / (4 xi^2), is below e^{-L}
+//     for k > k_max; the grid holds |n_d| <= k_max |a_d| / (2 pi) per lattice direction, oversampled
+//     by beta: M_d >= 2 beta n_max,d (FFT-friendly sizes 2^a 3^b 5^c).
+//  4. Window width s (grid units), from aliasing: the alias of mode nu = n / M relative to nu is
+//     exp(-2 pi^2 s^2 (1 - 2 nu)), weighted by the kernel exp(-La (2 beta nu)^2); the worst nu gives
+//     2 t - t^2 / (beta^2 La) >= La with t = pi^2 s^2, smallest for t = beta^2 La (1 - sqrt(1 - 1/beta^2))
+//     (E10; cf. the same trade-off in the parameters m, P of Lindbo & Tornberg 2010).
+//     La = L + ln 10 + ln sqrt(M0 M1 M2) (aliasing errors of all modes add with random phases)
+//     + ln(1 + a_max^2 k_max^2 / 6) (Faxen factor of the modes near k_max) + ln max(1, 2 (xi a_max)^3)
+//     (share of the wave part in the torque/stresslet self terms).
+//  5. Support P from truncation: exp(-(P/2)^2 / (2 s^2)) (1 + edge Laplacian term) <= e^{-Lt},
+//     Lt = L + ln 10 + ln max(1, 2 (xi a_max)^3) (one window per particle: no sum over modes).
 // Why Gaussians: their transform is analytic, so the deconvolution is exact on sheared grids
-// (the window is separable in fractional coordinates and its transform is exp(-2 pi^2 sum (s n_d / M_d)^2)),
-// and the Faxen Laplacian of the window is analytic too (spread.hpp). The exponential of
-// semicircle needs about 30% fewer points per direction at equal accuracy but a numerical
-// transform; B-splines alias more and need larger grids.
-// Real-space cutoff: r_c gives about `neighbours` particles in the cutoff sphere at the mean
-// density, bounded by the minimum-image contract of trees::neighbor_pairs (r_c + 2 a_max <= L_min / 2).
+// (the window is separable in fractional coordinates, transform exp(-2 pi^2 sum (s n_d / M_d)^2)),
+// and the Faxen Laplacian of the window is analytic too (window.hpp). The exponential of
+// semicircle would need roughly half the points per direction at equal accuracy (8x fewer in 3D)
+// but a numerical transform and a numerical Laplacian; B-splines alias more and need larger grids.
 #include "ewald/lattice.hpp"
 
 #include <array>

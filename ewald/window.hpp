@@ -6,8 +6,8 @@
 // i0 = ceil(M s_p - P/2) (indices taken modulo M), at offsets delta = i - M s_p in grid units. The
 // window is separable in fractional coordinates,
 //     W(x) = prod_d omega(delta_d),   omega(delta) = exp(-delta^2 / (2 s^2)) / (sqrt(2 pi) s),
-// (unit sum over the grid), with transform W^(n) = prod_d exp(-2 pi^2 s^2 n_d^2 / M_d^2) [Lindbo &
-// Tornberg 2010, eq. 3.9, in fractional form]. On a sheared lattice it is an anisotropic Gaussian
+// (unit sum over the grid), with transform W^(n) = prod_d exp(-2 pi^2 s^2 n_d^2 / M_d^2)
+// [docs/ewald.md (E7)]. On a sheared lattice it is an anisotropic Gaussian
 // in x, which the deconvolution by W^(n)^2 handles exactly.
 // Faxen factors: the spreading/interpolation kernel of a particle of radius a is W + c lap W with
 // c = a^2/6 (force/velocity) or a^2/10 (torque, stresslet / rotation, strain), whose transform is

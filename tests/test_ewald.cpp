@@ -218,16 +218,19 @@ TEST_CASE("Ewald: Lees-Edwards lattice is periodic and continuous in the strain"
 TEST_CASE("Ewald: simple cubic array sedimentation vs Zick & Homsy (1982)") {
   // One sphere per cubic cell of side L, phi = (4 pi / 3)(a/L)^3. Drag coefficient K = F/(6 pi mu a U)
   // = 1 / (6 pi mu a M_11) (T and S vanish by cubic symmetry, so F, FT and FTS agree).
-  // Reference K from Zick & Homsy (1982) Table 2 (simple cubic), as quoted in the Basilisk test
-  // src/test/spheres.c (Popinet). The far field reproduces Hasimoto's 1 - 1.7601 phi^(1/3) + phi and
-  // misses the O(phi^2) term of the exact dilute series (Sangani & Acrivos 1982:
-  // 1/K = 1 - 1.7601 phi^(1/3) + phi - 1.5593 phi^2 + ...), so its relative error in K grows like
-  // 1.56 phi^2 K: 0.2% at phi = 0.027, 1.5% at 0.064, then far-field failure (docs/ewald.md s.6).
+  // Reference K: Zick & Homsy (1982) Table 2, simple cubic, as quoted in two independent public
+  // sources that agree where they overlap: the Basilisk test src/test/spheres.c (K at
+  // phi = 0.027 ... 0.45) and the rajeshrinet/pystokes example "mobility as a function of volume
+  // fraction" (1/K = 0.8251 at phi = 0.001, 0.4980 at 0.027, ...).
+  // The far field reproduces Hasimoto's 1/K = 1 - 1.7601 phi^(1/3) + phi and misses the O(phi^2)
+  // term of the exact dilute series (Sangani & Acrivos 1982: ... - 1.5593 phi^2 + ...), so its
+  // relative error in K grows like 1.56 phi^2 K: 1e-5 at phi = 0.001, 0.2% at 0.027, 1.5% at
+  // 0.064; beyond that the far-field model fails (16% at 0.216; docs/ewald.md s.6).
   struct Row {
     double phi, K;
   };
-  const Row zh[] = {{0.027, 2.008}, {0.064, 2.810}, {0.125, 4.292}, {0.216, 7.442},
-                    {0.343, 15.4},  {0.45, 28.1}};
+  const Row zh[] = {{0.001, 1.0 / 0.8251}, {0.027, 2.008}, {0.064, 2.810}, {0.125, 4.292},
+                    {0.216, 7.442},        {0.343, 15.4},  {0.45, 28.1}};
   const double mu = 1.0, a = 1.0;
   for (const Row& row : zh) {
     const double L = a * std::cbrt(4.0 * pi / (3.0 * row.phi));
@@ -236,16 +239,15 @@ TEST_CASE("Ewald: simple cubic array sedimentation vs Zick & Homsy (1982)") {
     const double hasimoto = 1.0 / (1.0 - 1.7601 * std::cbrt(row.phi) + row.phi);
     MESSAGE("phi " << row.phi << "  K(far field) " << K << "  K(Zick-Homsy) " << row.K << "  rel.dev "
                    << K / row.K - 1.0);
+    CAPTURE(row.phi);
     // The far-field model is Hasimoto's series, up to RPY lattice terms beyond phi (~1e-4 at 0.216).
     if (row.phi < 0.3) CHECK(K == doctest::Approx(hasimoto).epsilon(2e-4));
-    if (row.phi < 0.03) CHECK(std::abs(K / row.K - 1.0) < 0.005);
-    if (row.phi > 0.03 && row.phi < 0.07) CHECK(std::abs(K / row.K - 1.0) < 0.02);
+    // Dilute agreement with the exact values: the 4-digit table (6e-5) plus the missing phi^2 term.
+    if (row.phi < 0.01) CHECK(std::abs(K / row.K - 1.0) < 3e-4);
+    else if (row.phi < 0.03) CHECK(std::abs(K / row.K - 1.0) < 0.005);
+    else if (row.phi < 0.07) CHECK(std::abs(K / row.K - 1.0) < 0.02);
+    else CHECK(K < row.K);  // far field under-predicts the drag of dense arrays
   }
-  // Very dilute, phi = 0.001: the Sangani-Acrivos series itself (no tabulated ZH value used).
-  const double phi = 0.001, L = a * std::cbrt(4.0 * pi / (3.0 * phi));
-  const MatX M = ewald::ewald_mobility({Vec3::Zero()}, {a}, mu, Moments::F, cube(L));
-  const double inv_sa = 1.0 - 1.7601 * std::cbrt(phi) + phi - 1.5593 * phi * phi;
-  CHECK(6 * pi * mu * a * M(0, 0) == doctest::Approx(inv_sa).epsilon(1e-5));
 }
 
 // ---------------------------------------------------------------------------------------------
