@@ -578,7 +578,7 @@ ResistanceSeries::ResistanceSeries(double lambda, int order)
     : lambda_(lambda), order_(order > 0 ? order : default_order(lambda)) {
   if (!(lambda > 0.0) || !std::isfinite(lambda))
     throw std::invalid_argument("ResistanceSeries: lambda must be positive");
-  if (order_ < 20 || order_ > 2000) throw std::invalid_argument("ResistanceSeries: bad order");
+  if (order_ < 20 || order_ > 1200) throw std::invalid_argument("ResistanceSeries: order must be in [20, 1200]");
   const std::shared_ptr<const LambdaSums> sums_ptr = lambda_sums(lambda, order_);
   const LambdaSums& sums = *sums_ptr;
   const double l = lambda, l2 = l * l, l3 = l2 * l, l4 = l3 * l, l5 = l4 * l;

@@ -9,8 +9,9 @@
 
 namespace stokesian::lubrication {
 
-ResistanceTable::ResistanceTable(double lambda, double xi_min, double xi_max, double step)
-    : series_(lambda), xi_min_(xi_min), xi_max_(xi_max) {
+ResistanceTable::ResistanceTable(double lambda, double xi_min, double xi_max, double step,
+                                 int order)
+    : series_(lambda, order), xi_min_(xi_min), xi_max_(xi_max) {
   if (!(xi_min > 0.0) || !(xi_max > xi_min) || !(step > 0.0))
     throw std::invalid_argument("ResistanceTable: bad range");
   u0_ = std::log(xi_min);

@@ -20,8 +20,9 @@ namespace stokesian::lubrication {
 
 class ResistanceTable {
  public:
+  /// order = 0 selects ResistanceSeries::default_order(lambda).
   explicit ResistanceTable(double lambda, double xi_min = 1e-8, double xi_max = 1e3,
-                           double step = 0.025);
+                           double step = 0.025, int order = 0);
 
   double lambda() const { return series_.lambda(); }
   double xi_min() const { return xi_min_; }
