@@ -320,6 +320,32 @@ TEST_CASE("PME: Lees-Edwards periodic in strain and continuous across the remap"
   CHECK(rel_error(yb, ya) < 2 * tol);
 }
 
+TEST_CASE("translation invariance: arbitrary shifts (Ewald) and lattice shifts (PME)") {
+  // A rigid translation leaves every separation unchanged: the Ewald matrix to rounding (1e-13).
+  // PME windows move relative to the grid, so a generic shift changes the product by at most the
+  // PME error on each side (2 tol); a shift by the sheared lattice vector a2 (and wrapping out of
+  // the box, negative coordinates) leaves fractional coordinates unchanged up to rounding.
+  const Vec3 L(9.0, 8.0, 10.0);
+  const double strain = 0.3;
+  const Config c = random_config(12, L, 0.5, 1.2, 51);
+  Config shifted = c, lattice_shifted = c;
+  const Vec3 a2(strain * L.y(), L.y(), 0.0);
+  for (auto& p : shifted.x) p += Vec3(-13.7, 4.2, 0.35);
+  for (auto& p : lattice_shifted.x) p -= 2.0 * a2 + Vec3(L.x(), 0.0, -L.z());
+  const MatX M0 = ewald::ewald_mobility(c.x, c.a, 1.0, Moments::FTS, box(L, strain));
+  const MatX M1 = ewald::ewald_mobility(shifted.x, shifted.a, 1.0, Moments::FTS, box(L, strain));
+  CHECK(rel_error(M1, M0) < 1e-13);
+  const double tol = 1e-6;
+  const VecX x = random_vector(M0.rows(), 9);
+  VecX y0, y1, y2;
+  ewald::PmeFarField(c.x, c.a, 1.0, Moments::FTS, box(L, strain), tol).apply(x, y0);
+  ewald::PmeFarField(shifted.x, shifted.a, 1.0, Moments::FTS, box(L, strain), tol).apply(x, y1);
+  ewald::PmeFarField(lattice_shifted.x, lattice_shifted.a, 1.0, Moments::FTS, box(L, strain), tol).apply(x, y2);
+  CHECK(rel_error(y1, y0) < 2 * tol);
+  CHECK(rel_error(y2, y0) < 1e-12);
+  CHECK(rel_error(y0, M0 * x) < tol);
+}
+
 TEST_CASE("PME: deterministic for a given thread count and independent of it") {
   // Slab colouring fixes every summation order (spread.hpp), so 1 and 2 threads agree bitwise.
   const Vec3 L(12.0, 12.0, 12.0);
