@@ -27,7 +27,15 @@ class Results {
   std::vector<std::pair<std::map<std::string, double>, std::map<std::string, double>>> rows_;
 };
 
-// Median wall time of `repeats` calls of f (seconds); one untimed warm-up call first.
+// Wall time of one call of f (seconds), no warm-up: for one-off phases (set-up, first factorisation).
+template <class F>
+double time_once(F&& f) {
+  const auto a = std::chrono::steady_clock::now();
+  f();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count();
+}
+
+// Median wall time of `repeats` (>= 1) calls of f (seconds); one untimed warm-up call first.
 template <class F>
 double median_time(F&& f, int repeats) {
   f();

@@ -30,7 +30,7 @@ void mobility_product(const std::vector<Vec3>& x, const std::vector<double>& a, 
   const long n = long(x.size());
   assert(in.size() == n * d);
   out.setZero(n * d);
-#pragma omp parallel for schedule(dynamic, 16)
+#pragma omp parallel for schedule(dynamic, 16) if (n >= 256)  // below this, thread start-up costs more than it saves
   for (long i = 0; i < n; ++i) {
     double* yi = out.data() + i * d;
     mobility::apply_self(a[i], mu, m, in.data() + i * d, yi);

@@ -188,7 +188,7 @@ void accumulate(const Law& law, double cutoff_gap, const std::vector<trees::Neig
   const long n = static_cast<long>(pairs.size());
   std::vector<EnergyDerivative> e(pairs.size());
   // Independent per-pair evaluation; the scatter below is serial so sums do not depend on threads.
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n >= 2048)  // threads only pay off for many pairs
   for (long k = 0; k < n; ++k) {
     const auto& p = pairs[k];
     e[k] = shifted(law, cutoff_gap, p.dist, radius[p.i], radius[p.j]);

@@ -54,7 +54,7 @@ SparseMatrix NearField::assemble(const std::vector<Vec3>& x, const std::vector<d
   std::vector<MatX> blocks(pairs.size());
   std::vector<char> inside(pairs.size(), 0);
   NearFieldStats st;
-#pragma omp parallel for schedule(dynamic, 8)
+#pragma omp parallel for schedule(dynamic, 8) if (pairs.size() >= 64)  // each pair block costs ~50 us
   for (long k = 0; k < long(pairs.size()); ++k) {
     const auto& p = pairs[std::size_t(k)];
     const double ai = a[std::size_t(p.i)], aj = a[std::size_t(p.j)];

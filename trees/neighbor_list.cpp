@@ -152,7 +152,7 @@ std::vector<NeighborPair> neighbor_pairs(const std::vector<Vec3>& x, const std::
   const int N = static_cast<int>(x.size());
   // Each thread collects into its own vector; the final sort makes the order thread-independent
   // (every pair's r is computed by the same expression whichever thread finds it).
-#pragma omp parallel
+#pragma omp parallel if (N >= 4096)  // threads only pay off for many particles
   {
     std::vector<NeighborPair> local;
 #pragma omp for schedule(static) nowait
