@@ -82,9 +82,10 @@ struct NearContactForm {
 
 /// All resistance functions for one size ratio lambda = a2/a1 (0 < lambda; tested for
 /// 0.01 <= lambda <= 100).  The series order K (highest power of 1/s) defaults to
-/// default_order(lambda): 200 for max(lambda, 1/lambda) <= 4, 400 up to 16, 600 beyond
-/// (construction ~0.06 s, 0.5 s, 2 s: lambda-weighted recurrences, O(K^3) time, O(K^2)
-/// memory: ~0.2 GB at K = 1000; K is limited to [20, 1200]).  Sums are cached per (lambda, K).
+/// default_order(lambda): 200 for max(lambda, 1/lambda) <= 4, 400 up to 16, 800 beyond
+/// (construction ~0.1 s, 0.5 s, 1-3 s: lambda-weighted recurrences, at most O(K^3) time and
+/// O(K^2) memory, much less for very unequal spheres; K is limited to [20, 1200]).  The
+/// recurrence sums are cached per (lambda, K) in the process.
 class ResistanceSeries {
  public:
   explicit ResistanceSeries(double lambda, int order = 0);
