@@ -461,8 +461,8 @@ TEST_CASE("lambda-weighted recurrences reproduce the lambda-independent ones") {
   // The production path sums the recurrences with weights x^q y^p (O(K^3) per lambda); the
   // reference path computes every P_npq, Q_npq (O(K^4)) and sums afterwards.  Same numbers
   // in exact arithmetic; in double they differ by rounding (weights formed via exp/log,
-  // ~1e-14 each), observed <= 3e-12 relative at order 60, hence 1e-10.
-  for (double l : {0.05, 1.0, 7.0})
+  // ~1e-14 each; weights below 1e-30 dropped), observed <= 5e-11 relative, hence 1e-9.
+  for (double l : {0.05, 1.0, 7.0, 100.0})
     for (int id = 0; id < 10; ++id) {
       const std::vector<double> a = detail::series_sums(l, 60, id, false);
       const std::vector<double> b = detail::series_sums(l, 60, id, true);
@@ -472,7 +472,7 @@ TEST_CASE("lambda-weighted recurrences reproduce the lambda-independent ones") {
         CAPTURE(l);
         CAPTURE(id);
         CAPTURE(k);
-        CHECK(std::abs(a[k] - b[k]) <= 1e-10 * std::abs(b[k]) + 1e-14 * scale);
+        CHECK(std::abs(a[k] - b[k]) <= 1e-9 * std::abs(b[k]) + 1e-14 * scale);
       }
     }
 }
