@@ -12,7 +12,9 @@
 //   self part: M_self_free - wave(r = 0) per particle.
 // Everything that depends only on the configuration (windows, slab colouring, pair scalars, FFTW
 // plans) is prepared in the constructor; apply() is then repeatable and its result is independent
-// of the number of OpenMP threads. All parameters come from the tolerance (pme_parameters.hpp).
+// of the number of OpenMP threads. apply() uses work arrays owned by the object: one product at a
+// time per object (it parallelises internally). Construct objects from one thread at a time (FFTW
+// planning is not thread-safe). All parameters come from the tolerance (pme_parameters.hpp).
 // Lees-Edwards: the grid lives on fractional coordinates of the sheared lattice (lattice.hpp) and
 // the kernel uses the sheared reciprocal vectors; the strain is reduced first, so the operator is
 // exactly periodic in the strain.
