@@ -108,7 +108,7 @@ class ResistanceSeries {
   /// converged for s >= about 2.5.  X^C uses the exact bispherical sum in both paths.
   ResistanceScalars far_field_series(double s) const;
 
-  /// Separation s above which at_gap() uses the plain series (the regimes agree to ~1e-14).
+  /// Separation s above which at_gap() uses the plain series (the two agree to <= 5e-13 there).
   static constexpr double kSwitchS = 3.0;
 
   /// Series coefficient c_k (natural normalisation, see docs) of function i (0..21).
