@@ -37,6 +37,7 @@ PmeFarField::PmeFarField(const std::vector<Vec3>& x, const std::vector<double>& 
   if (x.size() != a.size() || x.empty()) throw std::invalid_argument("PmeFarField: bad particle arrays");
   const auto [amin, amax] = std::minmax_element(a.begin(), a.end());
   p_ = pme_parameters(tolerance, lattice_, int(n_), *amin, *amax, m, opt);
+  if (p_.support > 64) throw std::invalid_argument("PmeFarField: window support above 64 points");
 
   // Grid and windows in fractional coordinates.
   grid_.M = p_.grid;
