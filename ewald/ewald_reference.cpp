@@ -58,8 +58,9 @@ MatX ewald_mobility(const std::vector<Vec3>& x, const std::vector<double>& a, do
           for (int t = -nb[2]; t <= nb[2]; ++t) {
             const Vec3 r = r0 + lat.A * Vec3(p, q, t);
             const double dist = r.norm();
-            if (dist >= rmax || dist == 0.0) continue;
-            add_block(M, i, j, real_scalars(a[i], a[j], dist, xi, mu, m), r / dist, m);
+            if (dist >= rmax || (i == j && dist == 0.0)) continue;
+            // Coincident distinct centres give an isotropic block: any axis will do.
+            add_block(M, i, j, real_scalars(a[i], a[j], dist, xi, mu, m), dist > 0.0 ? Vec3(r / dist) : Vec3::UnitZ(), m);
           }
     }
     add_block(M, i, i, self_correction(a[i], xi, mu), Vec3::UnitZ(), m);

@@ -56,7 +56,8 @@ PmeFarField::PmeFarField(const std::vector<Vec3>& x, const std::vector<double>& 
   const auto pairs = trees::neighbor_pairs(x, a, domain, p_.cutoff_gap);
   pairs_.resize(pairs.size());
   for (std::size_t q = 0; q < pairs.size(); ++q)
-    pairs_[q] = Pair{pairs[q].i, pairs[q].j, pairs[q].r / pairs[q].dist, pairs[q].dist};
+    pairs_[q] = Pair{pairs[q].i, pairs[q].j, pairs[q].dist > 0.0 ? Vec3(pairs[q].r / pairs[q].dist) : Vec3::UnitZ(),
+                     pairs[q].dist};  // coincident centres: isotropic block, any axis
   pair_start_.assign(n_ + 1, 0);
   for (const Pair& pr : pairs_) {
     ++pair_start_[pr.i + 1];
