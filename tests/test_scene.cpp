@@ -154,3 +154,21 @@ TEST_CASE("command line: a bad scene exits non-zero and writes nothing") {
   CHECK(contains(msg, "bad.toml:4: [time] dt"));
   std::filesystem::remove_all(dir);
 }
+
+TEST_CASE("the resolved scene is complete: re-parsing it gives the same scene, bit for bit") {
+  const Scene a = io::parse_scene(
+      "[particles]\ngenerate = \"random\"\ncount = 20\nsize_distribution = \"lognormal\"\n[forces]\n"
+      "external_force = [0, 0, -1]\n[[forces.pair]]\nkind = \"dlvo\"\n[[forces.pair]]\nkind = \"hertz\"\n"
+      "[flow]\nkind = \"simple_shear\"\nrate = 0.3\n[time]\ndt = 0.1\nsteps = 7\nintegrator = \"midpoint\"\n",
+      "gen.toml");
+  const Scene b = io::parse_scene(a.toml, "resolved.toml");
+  CHECK(b.toml == a.toml);
+  REQUIRE(b.positions.size() == a.positions.size());
+  for (std::size_t i = 0; i < a.positions.size(); ++i) {
+    CHECK(b.positions[i] == a.positions[i]);
+    CHECK(b.radii[i] == a.radii[i]);
+  }
+  CHECK(b.forces.pair.size() == 2);
+  CHECK(b.time.integrator == Integrator::midpoint);
+  CHECK(b.flow.rate == 0.3);
+}
