@@ -209,6 +209,12 @@ TEST_CASE("Ewald: Lees-Edwards lattice is periodic and continuous in the strain"
     CHECK(rel_error(Md, M0) < 0.02);
     CHECK(rel_error(Mz, M0) > 1e-4);
   }
+  // Lx != Ly: the period is Lx / Ly (1.5 here), and gamma + 1 is a different lattice.
+  const Vec3 Lr(12.0, 8.0, 10.0);
+  const Config r = random_config(6, Lr, 0.4, 1.0, 29);
+  const MatX R0 = ewald::ewald_mobility(r.x, r.a, 1.0, Moments::FTS, box(Lr, 0.2));
+  CHECK(rel_error(ewald::ewald_mobility(r.x, r.a, 1.0, Moments::FTS, box(Lr, 1.7)), R0) < 1e-13);
+  CHECK(rel_error(ewald::ewald_mobility(r.x, r.a, 1.0, Moments::FTS, box(Lr, 1.2)), R0) > 1e-3);
   // Across the remap at gamma = 1/2 (reduced strain jumps from 1/2 to -1/2): continuous.
   const MatX Ma = ewald::ewald_mobility(c.x, c.a, 1.0, Moments::FTS, box(L, 0.5 - 1e-9));
   const MatX Mb = ewald::ewald_mobility(c.x, c.a, 1.0, Moments::FTS, box(L, 0.5 + 1e-9));
