@@ -33,7 +33,7 @@ struct PmeFarField::Fft {
 
 PmeFarField::PmeFarField(const std::vector<Vec3>& x, const std::vector<double>& a, double mu, Moments m,
                          const Domain& domain, double tolerance, const PmeOptions& opt)
-    : n_(long(x.size())), mu_(mu), m_(m), lattice_(Lattice::from_domain(domain)) {
+    : n_(long(x.size())), mu_(mu), m_(m), domain_(domain), lattice_(Lattice::from_domain(domain)) {
   if (x.size() != a.size() || x.empty()) throw std::invalid_argument("PmeFarField: bad particle arrays");
   const auto [amin, amax] = std::minmax_element(a.begin(), a.end());
   p_ = pme_parameters(tolerance, lattice_, int(n_), *amin, *amax, m, opt);
@@ -46,37 +46,8 @@ PmeFarField::PmeFarField(const std::vector<Vec3>& x, const std::vector<double>& 
   const Mat3 metric = lattice_.Ainv * lattice_.Ainv.transpose();
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) grid_.lap(i, j) = metric(i, j) * grid_.M[i] * grid_.M[j];
-  std::vector<Vec3> s(n_);
-  for (long p = 0; p < n_; ++p) s[p] = lattice_.Ainv * x[p];
-  windows_ = make_windows(grid_, s, a);
-  colouring_ = colour_slabs(grid_, windows_);
-
-  // Real-space pairs (minimum image, Lees-Edwards aware).
   radius_ = a;
-  const auto pairs = trees::neighbor_pairs(x, a, domain, p_.cutoff_gap);
-  pairs_.resize(pairs.size());
-  for (std::size_t q = 0; q < pairs.size(); ++q)
-    pairs_[q] = Pair{pairs[q].i, pairs[q].j, pairs[q].dist > 0.0 ? Vec3(pairs[q].r / pairs[q].dist) : Vec3::UnitZ(),
-                     pairs[q].dist};  // coincident centres: isotropic block, any axis
-  pair_start_.assign(n_ + 1, 0);
-  for (const Pair& pr : pairs_) {
-    ++pair_start_[pr.i + 1];
-    ++pair_start_[pr.j + 1];
-  }
-  for (long i = 0; i < n_; ++i) pair_start_[i + 1] += pair_start_[i];
-  pair_list_.resize(2 * pairs_.size());
-  std::vector<int> fill(pair_start_.begin(), pair_start_.end() - 1);
-  for (int q = 0; q < int(pairs_.size()); ++q) {
-    pair_list_[fill[pairs_[q].i]++] = 2 * q;
-    pair_list_[fill[pairs_[q].j]++] = 2 * q + 1;
-  }
-  if (pair_list_.size() * sizeof(PairScalars) <= kCacheBytes) {
-    std::vector<PairScalars> cache(pair_list_.size());
-#pragma omp parallel for schedule(dynamic, 64)
-    for (long i = 0; i < n_; ++i)
-      for (int t = pair_start_[i]; t < pair_start_[i + 1]; ++t) cache[t] = entry_scalars(i, t);
-    cache_ = std::move(cache);
-  }
+  set_positions(x);
   self_F_.resize(n_);
   self_T_.resize(n_);
   self_S_.resize(n_);
@@ -100,6 +71,45 @@ PmeFarField::PmeFarField(const std::vector<Vec3>& x, const std::vector<double>& 
   fft_->forward = fftw_plan_many_dft_r2c(3, dims, 1, fft_->real, nullptr, d, 1, spec, nullptr, d, 1, flags);
   fft_->backward = fftw_plan_many_dft_c2r(3, dims, 1, spec, nullptr, d, 1, fft_->real, nullptr, d, 1, flags);
   if (!fft_->forward || !fft_->backward) throw std::runtime_error("PmeFarField: FFTW planning failed");
+}
+
+void PmeFarField::set_positions(const std::vector<Vec3>& x) {
+  std::vector<Vec3> s(n_);
+  for (long p = 0; p < n_; ++p) s[p] = lattice_.Ainv * x[p];
+  windows_ = make_windows(grid_, s, radius_);
+  colouring_ = colour_slabs(grid_, windows_);
+
+  // Real-space pairs (minimum image, Lees-Edwards aware).
+  const auto pairs = trees::neighbor_pairs(x, radius_, domain_, p_.cutoff_gap);
+  pairs_.resize(pairs.size());
+  for (std::size_t q = 0; q < pairs.size(); ++q)
+    pairs_[q] = Pair{pairs[q].i, pairs[q].j, pairs[q].dist > 0.0 ? Vec3(pairs[q].r / pairs[q].dist) : Vec3::UnitZ(),
+                     pairs[q].dist};  // coincident centres: isotropic block, any axis
+  pair_start_.assign(n_ + 1, 0);
+  for (const Pair& pr : pairs_) {
+    ++pair_start_[pr.i + 1];
+    ++pair_start_[pr.j + 1];
+  }
+  for (long i = 0; i < n_; ++i) pair_start_[i + 1] += pair_start_[i];
+  pair_list_.resize(2 * pairs_.size());
+  std::vector<int> fill(pair_start_.begin(), pair_start_.end() - 1);
+  for (int q = 0; q < int(pairs_.size()); ++q) {
+    pair_list_[fill[pairs_[q].i]++] = 2 * q;
+    pair_list_[fill[pairs_[q].j]++] = 2 * q + 1;
+  }
+  cache_.clear();
+  if (pair_list_.size() * sizeof(PairScalars) <= kCacheBytes) {
+    std::vector<PairScalars> cache(pair_list_.size());
+#pragma omp parallel for schedule(dynamic, 64)
+    for (long i = 0; i < n_; ++i)
+      for (int t = pair_start_[i]; t < pair_start_[i + 1]; ++t) cache[t] = entry_scalars(i, t);
+    cache_ = std::move(cache);
+  }
+}
+
+void PmeFarField::update_positions(const std::vector<Vec3>& x) {
+  if (long(x.size()) != n_) throw std::invalid_argument("PmeFarField::update_positions: particle count changed");
+  set_positions(x);
 }
 
 PmeFarField::~PmeFarField() = default;

@@ -43,6 +43,10 @@ class PmeFarField final : public FarFieldOperator {
   void apply(const VecX& in, VecX& out) const override;
   const char* name() const override { return "pme"; }
 
+  // New positions, same particles, radii, box and strain: keeps the parameters, grid and FFTW plans
+  // and rebuilds windows, slab colouring and real-space pairs (the result equals a new object's).
+  void update_positions(const std::vector<Vec3>& x);
+
   const PmeParameters& parameters() const { return p_; }
   std::size_t real_pairs() const { return pairs_.size(); }
 
@@ -58,10 +62,12 @@ class PmeFarField final : public FarFieldOperator {
   };
   // Real-space scalars of entry t of particle i's neighbour list (cached or computed).
   mobility::PairScalars entry_scalars(long i, int t) const;
+  void set_positions(const std::vector<Vec3>& x);
   struct Fft;
   long n_;
   double mu_;
   Moments m_;
+  Domain domain_;
   Lattice lattice_;
   PmeParameters p_;
   GridGeometry grid_;
