@@ -193,6 +193,27 @@ TEST_CASE("Ewald: tends to free space as L grows, with the Hasimoto 1/L correcti
   }
 }
 
+TEST_CASE("Ewald: FTS tends to free space; after the 1/L term the remainder falls as L^-3") {
+  // All FTS blocks: M_periodic - M_free = -2.837297/(6 pi mu L) I on the translational blocks +
+  // O(L^-3) (the lattice rotlet / stresslet fields and the (4 pi / 3)(a/L)^3-type terms). Measured
+  // L^3 ||remainder|| / ||M_free|| = 6.89, 6.96, 6.98, 6.98 at L = 25, 50, 100, 200: check the
+  // L^-3 law to 1% between L = 50 and 100.
+  const double mu = 1.0;
+  const std::vector<Vec3> x{Vec3(1.0, 2.0, 3.0), Vec3(2.5, 3.2, 1.9)};
+  const std::vector<double> a{1.0, 0.6};
+  const MatX free = dense_mobility(x, a, mu, Moments::FTS);
+  double scaled[2];
+  int q = 0;
+  for (double L : {50.0, 100.0}) {
+    MatX D = ewald::ewald_mobility(x, a, mu, Moments::FTS, cube(L)) - free;
+    for (int i = 0; i < 2; ++i)
+      for (int j = 0; j < 2; ++j) D.block(11 * i, 11 * j, 3, 3) += 2.837297 / (6 * pi * mu * L) * Mat3::Identity();
+    scaled[q++] = D.norm() / free.norm() * L * L * L;
+  }
+  CHECK(scaled[1] == doctest::Approx(scaled[0]).epsilon(0.01));
+  CHECK(scaled[1] < 10.0);
+}
+
 TEST_CASE("Ewald: Lees-Edwards lattice is periodic and continuous in the strain") {
   // gamma and gamma + Lx/Ly give the same lattice: identical sums up to rounding (1e-13). A small
   // strain change moves the matrix by O(d gamma) (continuity); a generic strain differs from 0.
