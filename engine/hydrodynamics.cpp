@@ -5,6 +5,8 @@
 #include "engine/krylov.hpp"
 #include "engine/mobility_pair.hpp"
 #include "engine/sd_dense.hpp"
+#include "ewald/ewald_reference.hpp"
+#include "ewald/pme.hpp"
 
 #include <cmath>
 #include <sstream>
@@ -21,10 +23,29 @@ Hydrodynamics::Hydrodynamics(const ResolvedModel& model, double viscosity, const
 Hydrodynamics::~Hydrodynamics() = default;
 Hydrodynamics::Hydrodynamics(Hydrodynamics&&) noexcept = default;
 
+const FarFieldOperator& Hydrodynamics::far_field(const std::vector<Vec3>& x, const std::vector<double>& a,
+                                                 const Domain& domain) const {
+  if (model_.far_field == FarFieldMethod::pme) {
+    auto* pme = dynamic_cast<ewald::PmeFarField*>(op_.get());
+    if (pme && op_radii_ == a && op_domain_.box == domain.box && op_domain_.shear_strain == domain.shear_strain) {
+      pme->update_positions(x);
+      return *op_;
+    }
+    op_ = std::make_unique<ewald::PmeFarField>(x, a, mu_, model_.moments, domain, tol_);
+    op_radii_ = a;
+    op_domain_ = domain;
+  } else if (model_.far_field == FarFieldMethod::ewald) {
+    op_ = std::make_unique<ewald::EwaldFarField>(x, a, mu_, model_.moments, domain);
+  } else {
+    op_ = std::make_unique<DirectFarField>(x, a, mu_, model_.moments);
+  }
+  return *op_;
+}
+
 HydroResult Hydrodynamics::solve(const std::vector<Vec3>& x, const std::vector<double>& a,
                                  const std::vector<char>& fixed, const std::vector<Vec3>& F,
-                                 const std::vector<Vec3>& T) const {
-  if (sd_) return sd_->mobility_problem(x, a, fixed, F, T);
+                                 const std::vector<Vec3>& T, const Domain& domain) const {
+  if (sd_) return sd_->mobility_problem(x, a, fixed, F, T, domain);
   const Moments m = model_.moments;
   const int d = dof_per_particle(m);
   const long n = long(x.size());
@@ -60,13 +81,15 @@ HydroResult Hydrodynamics::solve(const std::vector<Vec3>& x, const std::vector<d
 
   // The operator y = M x at the resolved level.
   LinearOperator M;
+  const FarFieldOperator* op = nullptr;
   if (model_.level == HydroModel::free_draining) {
     M = [&](const VecX& in, VecX& out) {
       out.setZero(in.size());
       for (long i = 0; i < n; ++i) mobility::apply_self(a[std::size_t(i)], mu_, m, in.data() + i * d, out.data() + i * d);
     };
   } else {
-    M = [&](const VecX& in, VecX& out) { mobility_product(x, a, mu_, m, in, out); };
+    op = &far_field(x, a, domain);
+    M = [op](const VecX& in, VecX& out) { op->apply(in, out); };
   }
 
   HydroResult res;
@@ -123,7 +146,8 @@ HydroResult Hydrodynamics::solve(const std::vector<Vec3>& x, const std::vector<d
 }
 
 std::vector<Vec3> Hydrodynamics::brownian_displacement(const std::vector<Vec3>& x, const std::vector<double>& a,
-                                                       double kT, double dt, std::mt19937_64& rng) const {
+                                                       double kT, double dt, std::mt19937_64& rng,
+                                                       const Domain& domain) const {
   const long n = long(x.size());
   std::normal_distribution<double> gauss(0.0, 1.0);
   std::vector<Vec3> dx(static_cast<std::size_t>(n));
@@ -139,7 +163,8 @@ std::vector<Vec3> Hydrodynamics::brownian_displacement(const std::vector<Vec3>& 
   const int d = dof_per_particle(m);
   VecX w(n * d), y;
   for (auto& v : w) v = gauss(rng);
-  LinearOperator M = [&](const VecX& in, VecX& out) { mobility_product(x, a, mu_, m, in, out); };
+  const FarFieldOperator& op = far_field(x, a, domain);
+  LinearOperator M = [&op](const VecX& in, VecX& out) { op.apply(in, out); };
   const KrylovResult kr = lanczos_sqrt(M, w, y, tol_, 200);
   if (!kr.converged) {
     std::ostringstream o;

@@ -15,6 +15,7 @@
 // Brownian displacements (kT > 0, F and FT): dX_B = sqrt(2 kT dt) M^{1/2} W with W standard
 // normal; M^{1/2} W by Lanczos (engine/krylov.hpp). M_inf is divergence free (translational
 // blocks are built from the transverse projector), so no thermal drift term is needed here.
+#include "engine/far_field.hpp"
 #include "engine/flow.hpp"
 #include "engine/model.hpp"
 #include "engine/sym_traceless.hpp"
@@ -43,11 +44,18 @@ class Hydrodynamics {
 
   // F, T: non-hydrodynamic force and torque on each particle (T ignored at F level).
   HydroResult solve(const std::vector<Vec3>& x, const std::vector<double>& a, const std::vector<char>& fixed,
-                    const std::vector<Vec3>& F, const std::vector<Vec3>& T) const;
+                    const std::vector<Vec3>& F, const std::vector<Vec3>& T, const Domain& domain = Domain{}) const;
 
   // Brownian displacements sqrt(2 kT dt) M^{1/2} W for the positions (rotations are not tracked).
   std::vector<Vec3> brownian_displacement(const std::vector<Vec3>& x, const std::vector<double>& a, double kT,
-                                          double dt, std::mt19937_64& rng) const;
+                                          double dt, std::mt19937_64& rng, const Domain& domain = Domain{}) const;
+
+  // The far-field operator of the resolved method for this configuration (direct, ewald, pme).
+  // Valid until the next call. A PME operator is kept between calls and only moved to the new
+  // positions (update_positions) while particles, radii, box and strain are unchanged, so its
+  // parameters, grid and FFTW plans are made once per run (once per step under shear).
+  const FarFieldOperator& far_field(const std::vector<Vec3>& x, const std::vector<double>& a,
+                                    const Domain& domain) const;
 
   const ResolvedModel& model() const { return model_; }
 
@@ -57,6 +65,10 @@ class Hydrodynamics {
   AmbientFlow flow_;
   double tol_;
   std::unique_ptr<DenseStokesianDynamics> sd_;  // model "stokesian" (dense reference solver)
+  // Far-field operator of the last call (solves are serial: one evaluation at a time).
+  mutable std::unique_ptr<FarFieldOperator> op_;
+  mutable std::vector<double> op_radii_;
+  mutable Domain op_domain_;
 };
 
 }  // namespace stokesian

@@ -65,7 +65,8 @@ ResolvedModel resolve_model(const Scene& s) {
   m.reasons.push_back(m.brownian ? "fluid.kT > 0: Brownian motion on" : "fluid.kT = 0: athermal");
 
   // Level.
-  constexpr std::size_t kDenseSdLimit = 2000;  // dense SD is O(N^3) in time and O(N^2) memory
+  // Dense SD is O(N^3) in time and O(N^2) memory; in periodic boxes M_inf is the dense Ewald sum.
+  const std::size_t kDenseSdLimit = s.domain.periodic() ? 500 : 2000;
   if (s.hydro.model == HydroModel::auto_) {
     if (n <= 1) {
       m.level = HydroModel::free_draining;
@@ -74,7 +75,7 @@ ResolvedModel resolve_model(const Scene& s) {
       const double g = min_gap(s);
       std::ostringstream r;
       const bool near = g < 0.5 || !s.forces.pair.empty();
-      if (near && !s.domain.periodic() && !m.brownian && n <= kDenseSdLimit) {
+      if (near && !m.brownian && n <= kDenseSdLimit) {
         m.level = HydroModel::stokesian;
         r << "auto level: " << (g < 0.5 ? "close pairs (smallest gap " : "pair forces bring particles together (smallest gap ")
           << g << " a) -> stokesian (far field + lubrication, dense solver for N = " << n << ")";
@@ -83,8 +84,7 @@ ResolvedModel resolve_model(const Scene& s) {
         r << "auto level: " << n << " particles interact hydrodynamically -> far_field";
         if (near) {
           r << " (lubrication would be more accurate";
-          if (s.domain.periodic()) r << ", but periodic Stokesian dynamics is not in this version";
-          else if (m.brownian) r << ", but Brownian Stokesian dynamics is not in this version";
+          if (m.brownian) r << ", but Brownian Stokesian dynamics is not in this version";
           else r << ", but N > " << kDenseSdLimit << " needs the accelerated solver, not in this version";
           r << "; set model = \"far_field\" to silence)";
         }
@@ -96,8 +96,6 @@ ResolvedModel resolve_model(const Scene& s) {
     m.reasons.push_back(std::string("level set by scene: ") + to_string(m.level));
   }
   if (m.level == HydroModel::stokesian) {
-    if (s.domain.periodic())
-      unavailable(s, "model", "\"stokesian\" in periodic domains needs the periodic far field of a later version");
     if (m.brownian)
       unavailable(s, "model", "\"stokesian\" with fluid.kT > 0 needs near-field Brownian forces and drift, not in this "
                               "version; use \"far_field\" or kT = 0");
@@ -139,17 +137,33 @@ ResolvedModel resolve_model(const Scene& s) {
 
   // Far-field method.
   if (m.level != HydroModel::free_draining) {
-    if (s.domain.periodic() && m.level == HydroModel::far_field)
-      unavailable(s, "far_field", "periodic domains need the Ewald/PME far field of a later version; use "
-                                  "model = \"free_draining\" or an open domain");
-    if (s.hydro.far_field == FarFieldMethod::auto_ || s.hydro.far_field == FarFieldMethod::direct) {
+    const FarFieldMethod want = s.hydro.far_field;
+    if (want == FarFieldMethod::tree)
+      unavailable(s, "far_field", "\"tree\" is not in this version; available: \"direct\" (open), \"pme\" and "
+                                  "\"ewald\" (periodic), \"auto\"");
+    if (s.domain.periodic()) {
+      if (want == FarFieldMethod::direct)
+        unavailable(s, "far_field", "\"direct\" has no periodic images; periodic boxes use \"pme\" or \"ewald\"");
+      if (m.level == HydroModel::stokesian) {
+        m.far_field = FarFieldMethod::ewald;
+        m.reasons.push_back("far_field: dense Stokesian dynamics inverts the dense Ewald-summed mobility");
+      } else if (want == FarFieldMethod::ewald) {
+        m.far_field = FarFieldMethod::ewald;
+        m.reasons.push_back("far_field set by scene: ewald (dense reference, O(N^2) memory)");
+      } else {
+        m.far_field = FarFieldMethod::pme;
+        m.reasons.push_back(want == FarFieldMethod::auto_
+                                ? "auto far_field: periodic box -> pme (O(N log N), accuracy from tolerance)"
+                                : "far_field set by scene: pme");
+      }
+    } else {
+      if (want == FarFieldMethod::ewald || want == FarFieldMethod::pme)
+        unavailable(s, "far_field", std::string("\"") + to_string(want) +
+                                        "\" needs a periodic domain; open domains use \"direct\" or \"auto\"");
       m.far_field = FarFieldMethod::direct;
-      m.reasons.push_back(s.hydro.far_field == FarFieldMethod::auto_
+      m.reasons.push_back(want == FarFieldMethod::auto_
                               ? "auto far_field: open domain -> direct O(N^2) summation (the tree method is not in this version)"
                               : "far_field set by scene: direct");
-    } else {
-      unavailable(s, "far_field", std::string("\"") + to_string(s.hydro.far_field) +
-                                      "\" is not in this version; available for open domains: \"direct\", \"auto\"");
     }
     if (m.level == HydroModel::stokesian)
       m.reasons.push_back("near field: exact two-sphere resistance minus the two-body far field, pairs with "

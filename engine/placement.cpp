@@ -91,13 +91,16 @@ Placement place_particles(const PlacementParams& p, const Vec3& box_in) {
   const int max_sweeps = 20000;
   std::vector<Vec3> shift(static_cast<std::size_t>(n));
   for (int sweep = 0;; ++sweep) {
-    const auto pairs = periodic && 4.0 * *std::max_element(out.radius.begin(), out.radius.end()) >= box.minCoeff()
-                           ? trees::neighbor_pairs_bruteforce(out.position, out.radius, dom, 0.0)
-                           : trees::neighbor_pairs(out.position, out.radius, dom, 0.0);
+    const double reach = 2e-3 * *std::max_element(out.radius.begin(), out.radius.end());
+    const auto pairs = periodic && 4.0 * *std::max_element(out.radius.begin(), out.radius.end()) + reach >= box.minCoeff()
+                           ? trees::neighbor_pairs_bruteforce(out.position, out.radius, dom, reach)
+                           : trees::neighbor_pairs(out.position, out.radius, dom, reach);
     std::fill(shift.begin(), shift.end(), Vec3::Zero());
     long overlapping = 0;
     for (const auto& pr : pairs) {
-      const double contact = out.radius[std::size_t(pr.i)] + out.radius[std::size_t(pr.j)];
+      // Separate to contact plus a margin of 1e-3 (a gap of 1e-3 (a_i + a_j)), so that generated
+      // packings start outside the lubrication minimum gap.
+      const double contact = (1.0 + 1e-3) * (out.radius[std::size_t(pr.i)] + out.radius[std::size_t(pr.j)]);
       if (pr.dist >= contact) continue;
       ++overlapping;
       Vec3 dir = pr.dist > 0 ? Vec3(pr.r / pr.dist) : Vec3(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5).normalized();

@@ -2,6 +2,7 @@
 
 #include "engine/errors.hpp"
 #include "engine/far_field.hpp"
+#include "ewald/ewald_reference.hpp"
 
 #include <sstream>
 
@@ -11,23 +12,23 @@ DenseStokesianDynamics::DenseStokesianDynamics(Moments m, double mu, const Ambie
                                                lubrication::NearFieldParams p)
     : m_(m), mu_(mu), flow_(flow), near_(m, mu, p) {}
 
-MatX DenseStokesianDynamics::resistance(const std::vector<Vec3>& x, const std::vector<double>& a,
+MatX DenseStokesianDynamics::resistance(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain,
                                         lubrication::NearFieldStats* stats) const {
-  const MatX M = dense_mobility(x, a, mu_, m_);
+  const MatX M = domain.periodic() ? ewald::ewald_mobility(x, a, mu_, m_, domain) : dense_mobility(x, a, mu_, m_);
   Eigen::LLT<MatX> llt(M);
   if (llt.info() != Eigen::Success) throw PhysicsError("far-field mobility is not positive definite");
   MatX R = llt.solve(MatX::Identity(M.rows(), M.cols()));
-  R += MatX(near_.assemble(x, a, Domain{}, stats));
+  R += MatX(near_.assemble(x, a, domain, stats));
   return 0.5 * (R + R.transpose());
 }
 
 HydroResult DenseStokesianDynamics::mobility_problem(const std::vector<Vec3>& x, const std::vector<double>& a,
                                                      const std::vector<char>& fixed, const std::vector<Vec3>& F,
-                                                     const std::vector<Vec3>& T,
+                                                     const std::vector<Vec3>& T, const Domain& domain,
                                                      lubrication::NearFieldStats* stats) const {
   const int d = dof_per_particle(m_);
   const long n = long(x.size()), N = n * d;
-  const MatX R = resistance(x, a, stats);
+  const MatX R = resistance(x, a, domain, stats);
   // Unknown velocity entries v (mobile particles' U, Omega) and known entries k.
   std::vector<long> v, k;
   VecX known = VecX::Zero(N), f = VecX::Zero(N);
@@ -85,7 +86,8 @@ HydroResult DenseStokesianDynamics::mobility_problem(const std::vector<Vec3>& x,
 }
 
 HydroResult DenseStokesianDynamics::resistance_problem(const std::vector<Vec3>& x, const std::vector<double>& a,
-                                                       const std::vector<Vec3>& U, const std::vector<Vec3>& Omega) const {
+                                                       const std::vector<Vec3>& U, const std::vector<Vec3>& Omega,
+                                                       const Domain& domain) const {
   const int d = dof_per_particle(m_);
   const long n = long(x.size());
   VecX gen = VecX::Zero(n * d);
@@ -96,7 +98,7 @@ HydroResult DenseStokesianDynamics::resistance_problem(const std::vector<Vec3>& 
     if (d > 3) gen.segment<3>(i * d + 3) = (Omega.empty() ? Vec3::Zero() : Omega[s]) - flow_.Omega;
     if (d > 6) gen.segment<5>(i * d + 6) = -Einf;
   }
-  const VecX FTS = resistance(x, a) * gen;
+  const VecX FTS = resistance(x, a, domain) * gen;
   HydroResult res;
   res.U = U;
   res.Omega = Omega;

@@ -3,7 +3,8 @@
 //
 //   R = (M_inf)^{-1} + R_nf          [Durlofsky, Brady & Bossis 1987, eq. 2.17; Brady & Bossis 1988]
 //
-// with M_inf the far-field grand mobility (engine/far_field.hpp, dense) and R_nf the pairwise
+// with M_inf the far-field grand mobility (engine/far_field.hpp dense, or ewald/ewald_reference.hpp
+// in periodic boxes) and R_nf the pairwise
 // near-field correction (lubrication/near_field.hpp). In the generalised layout
 // [F T S] = R [U - U_inf, Omega - Omega_inf, -E_inf]:
 //   resistance problem: given velocities and E_inf -> F, T, S (one product with R);
@@ -22,17 +23,17 @@ class DenseStokesianDynamics {
  public:
   DenseStokesianDynamics(Moments m, double mu, const AmbientFlow& flow, lubrication::NearFieldParams p = {});
 
-  // R = M_inf^{-1} + R_nf (open domain).
-  MatX resistance(const std::vector<Vec3>& x, const std::vector<double>& a,
+  // R = M_inf^{-1} + R_nf; M_inf direct (open domain) or Ewald-summed (periodic, Lees-Edwards).
+  MatX resistance(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain = Domain{},
                   lubrication::NearFieldStats* stats = nullptr) const;
 
   HydroResult mobility_problem(const std::vector<Vec3>& x, const std::vector<double>& a, const std::vector<char>& fixed,
-                               const std::vector<Vec3>& F, const std::vector<Vec3>& T,
+                               const std::vector<Vec3>& F, const std::vector<Vec3>& T, const Domain& domain = Domain{},
                                lubrication::NearFieldStats* stats = nullptr) const;
 
   // Given particle velocities (U, Omega relative to nothing: absolute) -> F, T, S.
   HydroResult resistance_problem(const std::vector<Vec3>& x, const std::vector<double>& a, const std::vector<Vec3>& U,
-                                 const std::vector<Vec3>& Omega) const;
+                                 const std::vector<Vec3>& Omega, const Domain& domain = Domain{}) const;
 
  private:
   Moments m_;

@@ -49,7 +49,7 @@ Evaluation Simulation::evaluate(const State& s, const std::vector<Vec3>& x) cons
     if (!te.empty()) ev.torque[i] += te.size() == 1 ? te[0] : te[i];
   }
   if (!scene_.forces.pair.empty()) forces::add_pair_forces(scene_.forces.pair, x, s.radius, s.domain, ev.force, &ev.pair);
-  ev.hydro = hydro_.solve(x, s.radius, s.fixed, ev.force, ev.torque);
+  ev.hydro = hydro_.solve(x, s.radius, s.fixed, ev.force, ev.torque, s.domain);
   return ev;
 }
 
@@ -92,7 +92,7 @@ void Simulation::advance(State& s, const Evaluation& ev, std::mt19937_64& rng) c
     }
   }
   if (model_.brownian) {
-    const auto dX = hydro_.brownian_displacement(s.position, s.radius, scene_.fluid.kT, dt, rng);
+    const auto dX = hydro_.brownian_displacement(s.position, s.radius, scene_.fluid.kT, dt, rng, s.domain);
     for (std::size_t i = 0; i < x1.size(); ++i)
       if (s.fixed.empty() || !s.fixed[i]) x1[i] += dX[i];
   }

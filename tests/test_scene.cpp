@@ -57,6 +57,12 @@ TEST_CASE("model resolution: cheapest adequate level and moments, recorded with 
   const std::string close = "[particles]\npositions = [[0,0,0],[2.1,0,0]]\n";
   CHECK(resolve_model(io::parse_scene(close, "c.toml")).level == HydroModel::stokesian);
   CHECK(resolve_model(io::parse_scene(close + "[fluid]\nkT = 1.0\n", "c.toml")).level == HydroModel::far_field);
+  // Periodic boxes: PME far field by default, dense Ewald under Stokesian dynamics.
+  const std::string box = "[domain]\nkind = \"periodic\"\nbox = [12, 12, 12]\n";
+  const ResolvedModel pm = resolve_model(io::parse_scene(box + kTwo + "[fluid]\nkT = 1.0\n", "p.toml"));
+  CHECK(pm.level == HydroModel::far_field);
+  CHECK(pm.far_field == FarFieldMethod::pme);
+  CHECK(resolve_model(io::parse_scene(box + close, "p.toml")).far_field == FarFieldMethod::ewald);
   CHECK(resolve_model(io::parse_scene("[particles]\npositions = [[0,0,0]]\n", "one.toml")).level ==
         HydroModel::free_draining);
   CHECK(contains(model("").describe(), "auto level"));
@@ -127,9 +133,8 @@ TEST_CASE("bad input names the file, line, key and allowed values") {
 TEST_CASE("asking for a model the engine lacks is an error, not a fallback") {
   CHECK(contains(error_of(kTwo + "[fluid]\nkT = 1.0\n[hydrodynamics]\nmodel = \"stokesian\"\n"), "Brownian"));
   CHECK(contains(error_of("[domain]\nkind = \"periodic\"\nbox = [10, 10, 10]\n" + kTwo +
-                          "[hydrodynamics]\nmodel = \"stokesian\"\n"), "periodic"));
-  CHECK(contains(error_of("[domain]\nkind = \"periodic\"\nbox = [10, 10, 10]\n" + kTwo +
-                          "[hydrodynamics]\nmodel = \"far_field\"\n"), "periodic"));
+                          "[hydrodynamics]\nfar_field = \"direct\"\n"), "no periodic images"));
+  CHECK(contains(error_of(kTwo + "[hydrodynamics]\nfar_field = \"pme\"\n"), "needs a periodic domain"));
   CHECK(contains(error_of(kTwo + "[hydrodynamics]\nfar_field = \"tree\"\n"), "not in this version"));
   CHECK(contains(error_of(kTwo + "[fluid]\nkT = 1.0\n[flow]\nkind = \"simple_shear\"\nrate = 1.0\n"), "FTS"));
   CHECK(contains(error_of(kTwo + "[fluid]\nkT = 1.0\n[time]\nintegrator = \"rkf45\"\n"), "rkf45"));
