@@ -1,9 +1,13 @@
-// Benchmark: direct far-field mobility product (open domain) against N, F/FT/FTS, 1 and 2 threads;
-// dense assembly for small N as the reference cost. Phases: "product" (matrix-free y = M x),
-// "dense_assembly" (dense_mobility), "dense_matvec" (M x with the assembled matrix).
+// Benchmark: direct far-field mobility (open domain) against N, F/FT/FTS, 1 and 2 threads; dense
+// assembly for small N as the reference cost. Phases: "step" (one full time step of a settling
+// cloud through the run driver: forces, hydrodynamic solve -- for FTS the CG stresslet solve --
+// and the Euler update), "product" (matrix-free y = M x), "dense_assembly" (dense_mobility),
+// "dense_matvec" (M x with the assembled matrix).
 //   bench_far_field [--quick] [--out DIR]
 #include "bench/harness.hpp"
 #include "engine/far_field.hpp"
+#include "engine/simulation.hpp"
+#include "io/scene_toml.hpp"
 
 #include <omp.h>
 
@@ -11,6 +15,7 @@
 #include <cstdio>
 #include <cstring>
 #include <random>
+#include <sstream>
 
 using namespace stokesian;
 
@@ -42,13 +47,24 @@ int main(int argc, char** argv) {
         const int reps = n <= 800 ? 5 : 3;
         std::map<std::string, double> phases;
         phases["product"] = bench::median_time([&] { mobility_product(x, a, 1.0, m, v, y); }, reps);
+        {
+          std::ostringstream t;
+          t << "[particles]\ngenerate = \"random\"\ncount = " << n << "\nvolume_fraction = 0.1\nseed = 3\n"
+            << "[forces]\nexternal_force = [0.0, 0.0, -1.0]\n[hydrodynamics]\nmodel = \"far_field\"\nmoments = \""
+            << to_string(m) << "\"\ntolerance = 1e-6\n[time]\ndt = 0.01\n";
+          const Simulation sim(io::parse_scene(t.str(), "bench.toml"));
+          State s = sim.initial_state();
+          std::mt19937_64 r(1);
+          phases["step"] = bench::median_time([&] { sim.advance(s, sim.evaluate(s, s.position), r); }, n <= 800 ? 3 : 1);
+        }
         if (n <= 1600 && threads == 1) {
           MatX M;
           phases["dense_assembly"] = bench::median_time([&] { M = dense_mobility(x, a, 1.0, m); }, 1);
           phases["dense_matvec"] = bench::median_time([&] { y = M * v; }, reps);
         }
         res.add({{"N", double(n)}, {"threads", double(threads)}, {"dof", double(dof_per_particle(m))}}, phases);
-        std::printf("%-3s N=%5ld threads=%d product %.3e s\n", to_string(m), n, threads, phases["product"]);
+        std::printf("%-3s N=%5ld threads=%d product %.3e s step %.3e s\n", to_string(m), n, threads, phases["product"],
+                    phases["step"]);
         std::fflush(stdout);
       }
     }
