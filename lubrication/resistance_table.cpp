@@ -102,9 +102,38 @@ ResistanceTableCache::Entry& ResistanceTableCache::entry_locked(const Key& key) 
   return *it->second;
 }
 
+namespace {
+// Process-wide store of built tables (immutable, keyed by (lambda, order); deterministic
+// construction, so sharing does not change any result).  Bounded to the last 128 inserted;
+// the caches keep their own references, so eviction only costs a rebuild elsewhere.
+std::shared_ptr<const ResistanceTable> shared_table(double lambda, int order) {
+  static std::mutex mutex;
+  static std::map<std::pair<double, int>, std::pair<std::shared_ptr<const ResistanceTable>, long>> store;
+  static long counter = 0;
+  const auto key = std::make_pair(lambda, order);
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    auto it = store.find(key);
+    if (it != store.end()) return it->second.first;
+  }
+  auto table = std::make_shared<const ResistanceTable>(lambda, kXiMin, kXiMax, kStep, order);
+  std::lock_guard<std::mutex> lock(mutex);
+  auto it = store.find(key);
+  if (it != store.end()) return it->second.first;  // built concurrently elsewhere: same values
+  if (store.size() >= 128) {
+    auto oldest = store.begin();
+    for (auto jt = store.begin(); jt != store.end(); ++jt)
+      if (jt->second.second < oldest->second.second) oldest = jt;
+    store.erase(oldest);
+  }
+  store.emplace(key, std::make_pair(table, counter++));
+  return table;
+}
+}  // namespace
+
 const ResistanceTable& ResistanceTableCache::built(Entry& e, const Key& key) {
   std::call_once(e.once, [&] {
-    e.table = std::make_unique<ResistanceTable>(key.first, kXiMin, kXiMax, kStep, key.second);
+    e.table = shared_table(key.first, key.second);
     e.ready.store(true, std::memory_order_release);
   });
   return *e.table;
