@@ -620,3 +620,31 @@ TEST_CASE("table cache: results do not depend on the order of the calls or the t
     CHECK(same_bits(c22, relabel_spheres(b11)));
   }
 }
+
+TEST_CASE("table cache: lambda-interpolation error vs spacing at the default orders (slow)" *
+          doctest::skip()) {
+  // Reproduces the table of docs/lubrication.md 2.5 (several minutes: series order 800
+  // tables cost 1-5 s each).  Run with
+  //   test_resistance_functions --no-skip -tc="*vs spacing*"
+  const std::vector<double> lambdas{0.013, 0.37, 0.93, 1.07, 2.9, 17.0, 83.0};
+  for (auto [points, h] : {std::pair{6, 0.1}, std::pair{6, 0.05}, std::pair{8, 0.2},
+                           std::pair{8, 0.15}, std::pair{8, 0.1}}) {
+    ResistanceTableCache cache(h, points);
+    cache.prefetch(lambdas);
+    double overall = 0.0;
+    for (double l : lambdas) {
+      const ResistanceSeries rs(l);
+      double worst = 0.0;
+      for (double lx = -7.993; lx < 2.995; lx += 0.0917) {
+        const double xi = std::pow(10.0, lx);
+        worst = std::max(worst, lambda_metric(cache.scalars(l, xi), rs.at_gap(xi), l));
+      }
+      overall = std::max(overall, worst);
+      MESSAGE(points << " points, h = " << h << ", lambda = " << l << ": " << worst);
+    }
+    MESSAGE(points << " points, h = " << h << ": worst " << overall);
+    if (points == ResistanceTableCache::kDefaultStencil &&
+        h == ResistanceTableCache::kDefaultLogLambdaStep)
+      CHECK(overall <= 1e-6);
+  }
+}
