@@ -92,7 +92,7 @@ HydroResult Hydrodynamics::solve(const std::vector<Vec3>& x, const std::vector<d
     M = [op](const VecX& in, VecX& out) { op->apply(in, out); };
   }
 
-  HydroResult res;
+  int iterations = 0;
   VecX gen = known;
   std::vector<long> idx;
   for (long k = 0; k < N; ++k)
@@ -118,29 +118,38 @@ HydroResult Hydrodynamics::solve(const std::vector<Vec3>& x, const std::vector<d
         << kr.relative_residual << " after " << kr.iterations << " CG iterations (tolerance " << tol_ << ")";
       throw PhysicsError(o.str());
     }
-    res.iterations = kr.iterations;
+    iterations = kr.iterations;
     for (std::size_t q = 0; q < idx.size(); ++q) gen[idx[q]] = z[long(q)];
   }
   VecX vel;
   M(gen, vel);
+  HydroResult out = unpack_solution(m, x, flow_, vel, gen, fixed);
+  out.iterations = iterations;
+  return out;
+}
 
-  res.U.resize(std::size_t(n));
-  res.F.resize(std::size_t(n));
+HydroResult unpack_solution(Moments m, const std::vector<Vec3>& x, const AmbientFlow& flow, const VecX& relative,
+                            const VecX& moments, const std::vector<char>& fixed) {
+  const int d = dof_per_particle(m);
+  const std::size_t n = x.size();
+  HydroResult res;
+  res.U.resize(n);
+  res.F.resize(n);
   if (d > 3) {
-    res.Omega.resize(std::size_t(n));
-    res.T.resize(std::size_t(n));
+    res.Omega.resize(n);
+    res.T.resize(n);
   }
-  if (d > 6) res.S.resize(std::size_t(n));
-  for (long i = 0; i < n; ++i) {
-    const std::size_t s = std::size_t(i);
+  if (d > 6) res.S.resize(n);
+  for (std::size_t s = 0; s < n; ++s) {
+    const long i = long(s);
     const bool fx = !fixed.empty() && fixed[s];
-    res.F[s] = gen.segment<3>(i * d);
-    res.U[s] = fx ? Vec3::Zero() : Vec3(vel.segment<3>(i * d) + flow_.velocity(x[s]));
+    res.F[s] = moments.segment<3>(i * d);
+    res.U[s] = fx ? Vec3::Zero() : Vec3(relative.segment<3>(i * d) + flow.velocity(x[s]));
     if (d > 3) {
-      res.T[s] = gen.segment<3>(i * d + 3);
-      res.Omega[s] = fx ? Vec3::Zero() : Vec3(vel.segment<3>(i * d + 3) + flow_.Omega);
+      res.T[s] = moments.segment<3>(i * d + 3);
+      res.Omega[s] = fx ? Vec3::Zero() : Vec3(relative.segment<3>(i * d + 3) + flow.Omega);
     }
-    if (d > 6) res.S[s] = gen.segment<5>(i * d + 6);
+    if (d > 6) res.S[s] = moments.segment<5>(i * d + 6);
   }
   return res;
 }

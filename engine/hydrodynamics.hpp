@@ -33,6 +33,12 @@ struct HydroResult {
   int iterations = 0;          // Krylov iterations of the constrained solve
 };
 
+// Per-particle results from generalised vectors in the interleaved layout: `relative` holds
+// [U - U_inf, Omega - Omega_inf, ...] and `moments` [F, T, S] (exerted on the fluid). Fixed
+// particles get U = Omega = 0.
+HydroResult unpack_solution(Moments m, const std::vector<Vec3>& x, const AmbientFlow& flow, const VecX& relative,
+                            const VecX& moments, const std::vector<char>& fixed);
+
 class DenseStokesianDynamics;
 
 class Hydrodynamics {

@@ -63,26 +63,7 @@ HydroResult DenseStokesianDynamics::mobility_problem(const std::vector<Vec3>& x,
   const VecX V = llt.solve(rhs);
   VecX gen = known;  // full generalised velocity [U - U_inf, Omega - Omega_inf, -E_inf]
   for (std::size_t p = 0; p < v.size(); ++p) gen[v[p]] = V[long(p)];
-  const VecX FTS = R * gen;
-  HydroResult res;
-  res.U.resize(std::size_t(n));
-  res.F.resize(std::size_t(n));
-  if (d > 3) {
-    res.Omega.resize(std::size_t(n));
-    res.T.resize(std::size_t(n));
-  }
-  if (d > 6) res.S.resize(std::size_t(n));
-  for (long i = 0; i < n; ++i) {
-    const std::size_t s = std::size_t(i);
-    res.U[s] = gen.segment<3>(i * d) + flow_.velocity(x[s]);
-    res.F[s] = FTS.segment<3>(i * d);
-    if (d > 3) {
-      res.Omega[s] = gen.segment<3>(i * d + 3) + flow_.Omega;
-      res.T[s] = FTS.segment<3>(i * d + 3);
-    }
-    if (d > 6) res.S[s] = FTS.segment<5>(i * d + 6);
-  }
-  return res;
+  return unpack_solution(m_, x, flow_, gen, R * gen, fixed);
 }
 
 HydroResult DenseStokesianDynamics::resistance_problem(const std::vector<Vec3>& x, const std::vector<double>& a,
