@@ -28,14 +28,14 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--quick")) quick = true;
     else if (!std::strcmp(argv[i], "--out") && i + 1 < argc) out = argv[++i];
   }
-  const std::vector<long> sizes = quick ? std::vector<long>{400, 800} : std::vector<long>{500, 1000, 2000, 4000, 8000};
+  const std::vector<long> sizes = quick ? std::vector<long>{400, 800} : std::vector<long>{500, 1000, 2000, 4000};
   const std::vector<double> phis = quick ? std::vector<double>{0.1, 0.5} : std::vector<double>{0.1, 0.2, 0.3, 0.4, 0.5};
   bench::Results res(quick ? "near_field_quick" : "near_field");
   for (Moments m : {Moments::FT, Moments::FTS}) {
     const int d = dof_per_particle(m);
     for (double phi : phis) {
       for (long n : sizes) {
-        if (m == Moments::FTS && n > 4000) continue;
+        if (m == Moments::FTS && n > 2000) continue;
         PlacementParams p;
         p.count = n;
         p.volume_fraction = phi;
