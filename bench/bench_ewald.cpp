@@ -43,12 +43,9 @@ double rel_error(const VecX& y, const VecX& ref) { return (y - ref).norm() / ref
 }  // namespace
 
 int main(int argc, char** argv) {
-  bool quick = false;
-  std::string out = "bench/results";
-  for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--quick")) quick = true;
-    else if (!std::strcmp(argv[i], "--out") && i + 1 < argc) out = argv[++i];
-  }
+  const bench::Options opt = bench::parse_options(argc, argv);
+  const bool quick = opt.quick;
+  const std::string out = opt.out;
   const std::vector<long> sizes = quick ? std::vector<long>{50, 100, 500, 1000, 2000}
                                         : std::vector<long>{100, 200, 1000, 2000, 4000, 8000};
   const std::vector<long> ewald_sizes = quick ? std::vector<long>{50, 100} : std::vector<long>{100, 200};

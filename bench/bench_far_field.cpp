@@ -20,12 +20,9 @@
 using namespace stokesian;
 
 int main(int argc, char** argv) {
-  bool quick = false;
-  std::string out = "bench/results";
-  for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--quick")) quick = true;
-    else if (!std::strcmp(argv[i], "--out") && i + 1 < argc) out = argv[++i];
-  }
+  const bench::Options opt = bench::parse_options(argc, argv);
+  const bool quick = opt.quick;
+  const std::string out = opt.out;
   const std::vector<long> sizes = quick ? std::vector<long>{100, 200, 400} : std::vector<long>{100, 200, 400, 800, 1600, 3200, 6400};
   bench::Results res(quick ? "far_field_direct_quick" : "far_field_direct");
   const int max_threads = std::min(2, omp_get_max_threads());

@@ -6,6 +6,8 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstdio>
+#include <cstdlib>
 #include <ctime>
 #include <filesystem>
 #include <fstream>
@@ -13,6 +15,20 @@
 #include <thread>
 
 namespace stokesian::bench {
+
+Options parse_options(int argc, char** argv) {
+  Options o;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--quick") o.quick = true;
+    else if (a == "--out" && i + 1 < argc) o.out = argv[++i];
+    else {
+      std::fprintf(stderr, "usage: %s [--quick] [--out DIR]\n", argv[0]);
+      std::exit(1);
+    }
+  }
+  return o;
+}
 
 std::map<std::string, std::string> machine_metadata() {
   std::map<std::string, std::string> m;

@@ -10,6 +10,14 @@
 
 namespace stokesian::bench {
 
+// Command line shared by every driver: bench_<name> [--quick] [--out DIR]. --quick is the short
+// form CI runs; results go to DIR (default bench/results).
+struct Options {
+  bool quick = false;
+  std::string out = "bench/results";
+};
+Options parse_options(int argc, char** argv);
+
 // Machine and build metadata: host, CPU model, logical cores, OpenMP max threads, compiler,
 // build type, git revision, UTC date.
 std::map<std::string, std::string> machine_metadata();
