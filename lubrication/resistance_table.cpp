@@ -184,15 +184,16 @@ bool ResistanceTableCache::prepare_radii(const std::vector<double>& radii) {
   std::sort(r.begin(), r.end());
   r.erase(std::unique(r.begin(), r.end()), r.end());
   const std::size_t n = r.size();
-  if (n * (n - (n > 0)) > kMaxExactRatios) {  // n (n - 1) ordered ratios a_j/a_i, a_i != a_j
+  std::set<double> lambdas;  // distinct ratios a_j/a_i, a_i != a_j (n (n - 1) at most)
+  if (n <= 64)
+    for (std::size_t i = 0; i < n && lambdas.size() <= kMaxExactRatios; ++i)
+      for (std::size_t j = 0; j < n; ++j)
+        if (i != j) lambdas.insert(r[j] / r[i]);
+  if (n > 64 || lambdas.size() > kMaxExactRatios) {
     set_exact_ratios({});
     return false;
   }
-  std::vector<double> lambdas;
-  for (std::size_t i = 0; i < n; ++i)
-    for (std::size_t j = 0; j < n; ++j)
-      if (i != j) lambdas.push_back(r[j] / r[i]);
-  set_exact_ratios(lambdas);
+  set_exact_ratios(std::vector<double>(lambdas.begin(), lambdas.end()));
   return true;
 }
 

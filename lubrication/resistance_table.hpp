@@ -92,10 +92,10 @@ class ResistanceTableCache {
   /// computed by division from the radii; pair_scalars looks up a2/a1 and a1/a2).  Builds the
   /// missing tables now (in parallel with OpenMP).
   void set_exact_ratios(const std::vector<double>& lambdas);
-  /// Scene rule: with the distinct radii of the scene, the ratios a_j/a_i (a_i != a_j) are
-  /// registered exact if there are at most kMaxExactRatios of them (up to 4 distinct radii),
-  /// otherwise the registered set is cleared (all non-node ratios interpolated).  Returns
-  /// true if the exact mode was chosen.
+  /// Scene rule: with the distinct radii of the scene, the distinct ratios a_j/a_i
+  /// (a_i != a_j) are registered exact if there are at most kMaxExactRatios of them (always
+  /// for up to 4 distinct radii), otherwise the registered set is cleared (all non-node
+  /// ratios interpolated).  Returns true if the exact mode was chosen.
   bool prepare_radii(const std::vector<double>& radii);
 
   /// Build now (in parallel with OpenMP) every table that scalars(lambda, .) will use for

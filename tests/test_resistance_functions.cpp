@@ -623,7 +623,7 @@ TEST_CASE("table cache: results do not depend on the order of the calls or the t
 
 TEST_CASE("table cache: lambda-interpolation error vs spacing at the default orders (slow)" *
           doctest::skip()) {
-  // Reproduces the table of docs/lubrication.md 2.5 (several minutes: series order 800
+  // Reproduces the table of docs/lubrication.md 2.5 (~2 min: series order 800
   // tables cost 1-5 s each).  Run with
   //   test_resistance_functions --no-skip -tc="*vs spacing*"
   const std::vector<double> lambdas{0.013, 0.37, 0.93, 1.07, 2.9, 17.0, 83.0};
