@@ -1,7 +1,8 @@
 // Benchmark: near-field (lubrication) assembly and CHOLMOD factorisation against N and volume
 // fraction, random bidisperse configurations (radii 1 and 1.4, equal numbers) in periodic boxes
-// (phi = 0.1-0.5). Bidisperse keeps the resistance tables to three size ratios; the tables are
-// built before timing (phase "tables").
+// (phi = 0.1-0.5). NearField registers the scene's size ratios (<= 4 distinct radii: exact tables
+// for lambda = 1, 1.4, 1/1.4), built during the untimed first assembly (phase "tables").
+// Continuous radii use tables interpolated in ln(lambda) (lubrication/resistance_table.hpp).
 // Phases: "neighbors" (cell-list search), "assembly" (R_nf over pairs with s < 4), "analyze_factor"
 // (first factorisation: ordering + symbolic + numeric), "refactor" (numeric only, pattern reused),
 // "solve". The factorised matrix is R_nf + R_self, R_self the block-diagonal single-sphere

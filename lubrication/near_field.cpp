@@ -49,6 +49,7 @@ SparseMatrix NearField::assemble(const std::vector<Vec3>& x, const std::vector<d
                                  NearFieldStats* stats) const {
   const int d = dof_per_particle(m_);
   const double amax = *std::max_element(a.begin(), a.end());
+  tables_.prepare_radii(a);  // exact tables for few distinct size ratios, interpolated in ln(lambda) otherwise
   const auto pairs = trees::neighbor_pairs(x, a, domain, (p_.cutoff - 2.0) * amax);
   // Pair blocks in parallel into a buffer, summed serially in pair order (deterministic).
   std::vector<MatX> blocks(pairs.size());
@@ -94,6 +95,7 @@ SparseMatrix NearField::assemble(const std::vector<Vec3>& x, const std::vector<d
 MatX NearField::assemble_dense(const std::vector<Vec3>& x, const std::vector<double>& a) const {
   const int d = dof_per_particle(m_);
   const long n = long(x.size());
+  tables_.prepare_radii(a);
   MatX R = MatX::Zero(n * d, n * d);
   for (long i = 0; i < n; ++i)
     for (long j = i + 1; j < n; ++j) {
