@@ -60,8 +60,9 @@ int main(int argc, char** argv) {
           phases["dense_matvec"] = bench::median_time([&] { y = M * v; }, reps);
         }
         res.add({{"N", double(n)}, {"threads", double(threads)}, {"dof", double(dof_per_particle(m))}}, phases);
-        std::printf("%-3s N=%5ld threads=%d product %.3e s step %.3e s\n", to_string(m), n, threads, phases["product"],
-                    phases["step"]);
+        std::printf("%-3s N=%5ld threads=%d product %.3e s", to_string(m), n, threads, phases["product"]);
+        if (phases.count("step")) std::printf(" step %.3e s", phases["step"]);
+        std::printf("\n");
         std::fflush(stdout);
       }
     }

@@ -30,7 +30,7 @@ def fit_exponent(n, t):
 for dof, name in names.items():
     for threads, style in ((1, "-o"), (2, "--s")):
         steps = sorted((r["params"]["N"], r["phases"]["step"]) for r in rows
-                       if r["params"]["dof"] == dof and r["params"]["threads"] == threads and "step" in r["phases"])
+                       if r["params"]["dof"] == dof and r["params"]["threads"] == threads and r["phases"].get("step", 0) > 0)
         if steps:
             n, t = np.array(steps).T
             ps = fit_exponent(n, t)
