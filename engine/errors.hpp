@@ -15,4 +15,11 @@ struct PhysicsError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// A matrix that should be symmetric positive definite is not; `column` is the failing column of
+// the factorisation (callers translate it into a particle and pair).
+struct NotPositiveDefinite : PhysicsError {
+  NotPositiveDefinite(const std::string& what, long col) : PhysicsError(what), column(col) {}
+  long column;
+};
+
 }  // namespace stokesian

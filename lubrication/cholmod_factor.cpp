@@ -75,7 +75,7 @@ bool CholmodFactor::factorize(const SparseMatrix& R_in) {
     // Force a fresh analysis next time: the factor is unusable.
     cholmod_free_factor(&m.L, &m.common);
     m.pattern_p.clear();
-    throw PhysicsError(o.str());
+    throw NotPositiveDefinite(o.str(), col);
   }
   if (m.common.status < CHOLMOD_OK) throw PhysicsError("CHOLMOD factorisation failed (status " + std::to_string(m.common.status) + ")");
   return same;

@@ -8,8 +8,8 @@
 //   solve(b)       x = R^{-1} b.
 //   multiply_L(w)  psi = P^T L w, whose covariance for standard normal w is P^T L L^T P = R: the
 //                  near-field Brownian force of shared/notes/method.md s.5.
-// A matrix that is not positive definite raises PhysicsError naming the failing column (callers
-// translate the column into a particle/pair).
+// A matrix that is not positive definite raises NotPositiveDefinite (engine/errors.hpp) with the
+// failing column; NearField::factorize translates it into the particle and its closest pair.
 #include "engine/types.hpp"
 
 #include <Eigen/SparseCore>

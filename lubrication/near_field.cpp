@@ -5,6 +5,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
+
+#include "engine/errors.hpp"
 
 namespace stokesian::lubrication {
 
@@ -90,6 +93,31 @@ SparseMatrix NearField::assemble(const std::vector<Vec3>& x, const std::vector<d
   R.makeCompressed();
   if (stats) *stats = st;
   return R;
+}
+
+void NearField::factorize(const SparseMatrix& R, CholmodFactor& factor, const std::vector<Vec3>& x,
+                          const std::vector<double>& a, const Domain& domain) const {
+  try {
+    factor.factorize(R);
+  } catch (const NotPositiveDefinite& e) {
+    const long d = dof_per_particle(m_), p = e.column / d;
+    long q = -1;
+    double best = 1e300;
+    for (long j = 0; j < long(x.size()); ++j) {
+      if (j == p) continue;
+      const double xi = 2.0 * domain.minimum_image(x[std::size_t(p)] - x[std::size_t(j)]).norm() /
+                            (a[std::size_t(p)] + a[std::size_t(j)]) - 2.0;
+      if (xi < best) {
+        best = xi;
+        q = j;
+      }
+    }
+    std::ostringstream o;
+    o << e.what() << " (particle " << p;
+    if (q >= 0) o << "; closest pair (" << p << ", " << q << ") at symmetric gap " << best;
+    o << ")";
+    throw PhysicsError(o.str());
+  }
 }
 
 MatX NearField::assemble_dense(const std::vector<Vec3>& x, const std::vector<double>& a) const {

@@ -50,6 +50,12 @@ class NearField {
   // The exact two-sphere resistance at the solve's moment level (2d x 2d).
   MatX exact_pair(const Vec3& r_vec, double ai, double aj) const;
 
+  // Factorises R (R_nf plus whatever the caller added, e.g. the preconditioner's diagonal) with
+  // CHOLMOD. A failure is reported as PhysicsError naming the particle of the failing column and
+  // its closest neighbour with their symmetric gap.
+  void factorize(const SparseMatrix& R, CholmodFactor& factor, const std::vector<Vec3>& x,
+                 const std::vector<double>& a, const Domain& domain) const;
+
   const NearFieldParams& params() const { return p_; }
   Moments moments() const { return m_; }
 

@@ -3,6 +3,7 @@
 
 #include "engine/errors.hpp"
 #include "lubrication/cholmod_factor.hpp"
+#include "lubrication/near_field.hpp"
 
 #include <random>
 
@@ -64,5 +65,24 @@ TEST_CASE("an indefinite matrix is reported, not factorised") {
     f.factorize(R);
   } catch (const PhysicsError& e) {
     CHECK(std::string(e.what()).find("not positive definite") != std::string::npos);
+  }
+}
+
+TEST_CASE("a failed near-field factorisation names the particle and its closest pair") {
+  // A deliberately indefinite R (negative diagonal entry of particle 2) must be reported with the
+  // particle owning the failing column and its nearest neighbour.
+  const std::vector<Vec3> x{Vec3(0, 0, 0), Vec3(5, 0, 0), Vec3(2.05, 0, 0), Vec3(0, 7, 0)};
+  const std::vector<double> a{1.0, 1.0, 1.0, 1.0};
+  lubrication::NearField nf(Moments::F, 1.0);
+  SparseMatrix R = MatX::Identity(12, 12).sparseView();
+  R.coeffRef(7, 7) = -1.0;  // column 7 belongs to particle 2 (3 entries per particle)
+  lubrication::CholmodFactor f;
+  try {
+    nf.factorize(R, f, x, a, Domain{});
+    FAIL("expected a PhysicsError");
+  } catch (const PhysicsError& e) {
+    const std::string msg = e.what();
+    CHECK(msg.find("particle 2") != std::string::npos);
+    CHECK(msg.find("(2, 0)") != std::string::npos);
   }
 }
