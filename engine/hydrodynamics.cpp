@@ -35,7 +35,14 @@ const FarFieldOperator& Hydrodynamics::far_field(const std::vector<Vec3>& x, con
     op_radii_ = a;
     op_domain_ = domain;
   } else if (model_.far_field == FarFieldMethod::ewald) {
+    // The dense Ewald matrix is kept while the configuration is identical (e.g. repeated draws).
+    if (dynamic_cast<ewald::EwaldFarField*>(op_.get()) && op_positions_ == x && op_radii_ == a &&
+        op_domain_.box == domain.box && op_domain_.shear_strain == domain.shear_strain)
+      return *op_;
     op_ = std::make_unique<ewald::EwaldFarField>(x, a, mu_, model_.moments, domain);
+    op_positions_ = x;
+    op_radii_ = a;
+    op_domain_ = domain;
   } else {
     op_ = std::make_unique<DirectFarField>(x, a, mu_, model_.moments);
   }

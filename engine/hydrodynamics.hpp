@@ -74,6 +74,7 @@ class Hydrodynamics {
   // Far-field operator of the last call (solves are serial: one evaluation at a time).
   mutable std::unique_ptr<FarFieldOperator> op_;
   mutable std::vector<double> op_radii_;
+  mutable std::vector<Vec3> op_positions_;
   mutable Domain op_domain_;
 };
 
