@@ -20,17 +20,18 @@ RkfStep rkf45_step(const VelocityField& U, const std::vector<Vec3>& x0, const st
   const std::size_t n = x0.size();
   RkfStep out;
   for (;;) {
-    auto stage = [&](std::initializer_list<std::pair<double, const std::vector<Vec3>*>> terms) {
+    // Stage at time c dt with positions x0 + dt sum_j a_j k_j.
+    auto stage = [&](double c, std::initializer_list<std::pair<double, const std::vector<Vec3>*>> terms) {
       std::vector<Vec3> y = x0;
-      for (const auto& [c, k] : terms)
-        for (std::size_t i = 0; i < n; ++i) y[i] += dt * c * (*k)[i];
-      return U(y);
+      for (const auto& [w, k] : terms)
+        for (std::size_t i = 0; i < n; ++i) y[i] += dt * w * (*k)[i];
+      return U(y, c * dt);
     };
-    const auto k2 = stage({{1.0 / 4, &k1}});
-    const auto k3 = stage({{3.0 / 32, &k1}, {9.0 / 32, &k2}});
-    const auto k4 = stage({{1932.0 / 2197, &k1}, {-7200.0 / 2197, &k2}, {7296.0 / 2197, &k3}});
-    const auto k5 = stage({{439.0 / 216, &k1}, {-8.0, &k2}, {3680.0 / 513, &k3}, {-845.0 / 4104, &k4}});
-    const auto k6 = stage({{-8.0 / 27, &k1}, {2.0, &k2}, {-3544.0 / 2565, &k3}, {1859.0 / 4104, &k4}, {-11.0 / 40, &k5}});
+    const auto k2 = stage(1.0 / 4, {{1.0 / 4, &k1}});
+    const auto k3 = stage(3.0 / 8, {{3.0 / 32, &k1}, {9.0 / 32, &k2}});
+    const auto k4 = stage(12.0 / 13, {{1932.0 / 2197, &k1}, {-7200.0 / 2197, &k2}, {7296.0 / 2197, &k3}});
+    const auto k5 = stage(1.0, {{439.0 / 216, &k1}, {-8.0, &k2}, {3680.0 / 513, &k3}, {-845.0 / 4104, &k4}});
+    const auto k6 = stage(0.5, {{-8.0 / 27, &k1}, {2.0, &k2}, {-3544.0 / 2565, &k3}, {1859.0 / 4104, &k4}, {-11.0 / 40, &k5}});
     std::vector<Vec3> x4(n);
     double err = 0;
     for (std::size_t i = 0; i < n; ++i) {

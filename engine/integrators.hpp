@@ -1,7 +1,7 @@
 #pragma once
 // Time integrators for dx/dt = U(x) (+ Brownian displacement).
 //   euler:    x1 = x0 + dt U(x0) + dX_B                       (Euler-Maruyama)
-//   midpoint: x1 = x0 + dt U(x0 + dt/2 U(x0)) + dX_B           (deterministic part 2nd order)
+//   midpoint: x1 = x0 + dt U(x0 + dt/2 U(x0), t0 + dt/2) + dX_B (deterministic part 2nd order)
 //   rkf45:    Runge-Kutta-Fehlberg 4(5) with step-size control (Fehlberg 1969; thesis s.2.3.3):
 //             the 4th-order solution is kept, the embedded 5th-order one estimates the local
 //             error e = max_i |x5_i - x4_i|; a step is accepted when e <= tol and the next
@@ -15,7 +15,9 @@
 
 namespace stokesian {
 
-using VelocityField = std::function<std::vector<Vec3>(const std::vector<Vec3>& x)>;
+// Velocities at positions x and time t0 + t (t measured from the start of the step; the time
+// enters through the Lees-Edwards strain of sheared boxes).
+using VelocityField = std::function<std::vector<Vec3>(const std::vector<Vec3>& x, double t)>;
 
 std::vector<Vec3> axpy(const std::vector<Vec3>& x, double h, const std::vector<Vec3>& u);
 

@@ -75,14 +75,34 @@ void Simulation::check_finite(const State& s) const {
     }
 }
 
+namespace {
+// The sheared lattice repeats when the image shift strain * Ly is a multiple of Lx: reduce the
+// strain to [-Lx/(2 Ly), Lx/(2 Ly)] (Lees-Edwards remap).
+double reduce_strain(double strain, const Vec3& box) {
+  const double period = box.x() / box.y();
+  return strain - period * std::round(strain / period);
+}
+}  // namespace
+
 void Simulation::advance(State& s, const Evaluation& ev, std::mt19937_64& rng) const {
-  const auto velocity = [&](const std::vector<Vec3>& x) { return evaluate(s, x).hydro.U; };
+  // Stage velocities at time t into the step: in a sheared box the lattice strain has advanced by
+  // rate * t (shared/notes/method.md s.4), so stages see the box of their own time.
+  const bool sheared = s.domain.periodic() && scene_.flow.kind == FlowParams::Kind::simple_shear;
+  const auto velocity = [&](const std::vector<Vec3>& x, double t) {
+    if (!sheared || t == 0.0) return evaluate(s, x).hydro.U;
+    State staged = s;
+    staged.domain.shear_strain += scene_.flow.rate * t;
+    staged.domain.shear_strain = reduce_strain(staged.domain.shear_strain, s.domain.box);
+    return evaluate(staged, x).hydro.U;
+  };
   const double dt = s.dt;
   std::vector<Vec3> x1;
   double dt_used = dt;
   switch (scene_.time.integrator) {
     case Integrator::euler: x1 = axpy(s.position, dt, ev.hydro.U); break;
-    case Integrator::midpoint: x1 = axpy(s.position, dt, velocity(axpy(s.position, 0.5 * dt, ev.hydro.U))); break;
+    case Integrator::midpoint:
+      x1 = axpy(s.position, dt, velocity(axpy(s.position, 0.5 * dt, ev.hydro.U), 0.5 * dt));
+      break;
     case Integrator::rkf45: {
       const RkfStep r = rkf45_step(velocity, s.position, ev.hydro.U, dt, scene_.time.rkf_tolerance, 1e-12 * scene_.time.dt);
       x1 = r.x;
@@ -101,7 +121,7 @@ void Simulation::advance(State& s, const Evaluation& ev, std::mt19937_64& rng) c
   s.step += 1;
   if (s.domain.periodic() && scene_.flow.kind == FlowParams::Kind::simple_shear) {
     s.domain.shear_strain += scene_.flow.rate * dt_used;
-    s.domain.shear_strain -= std::round(s.domain.shear_strain);  // lattice is periodic in strain
+    s.domain.shear_strain = reduce_strain(s.domain.shear_strain, s.domain.box);
   }
   wrap(s);
   check_finite(s);
