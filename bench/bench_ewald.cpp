@@ -57,15 +57,10 @@ int main(int argc, char** argv) {
   for (Moments m : {Moments::F, Moments::FTS}) {
     const int dof = dof_per_particle(m);
     for (long n : sizes) {
-      std::mt19937_64 rng(n);
-      std::uniform_real_distribution<double> u(0, 1);
       const double L = std::cbrt(double(n) * 4.19 * 1.25 / 0.1);  // <a^3> = 1.25 for a in [0.5, 1.5]
-      std::vector<Vec3> x;
-      std::vector<double> a;
-      for (long i = 0; i < n; ++i) {
-        x.emplace_back(L * u(rng), L * u(rng), L * u(rng));
-        a.push_back(0.5 + u(rng));
-      }
+      const bench::Cloud cloud = bench::random_cloud(n, L, std::uint64_t(n));
+      const std::vector<Vec3>& x = cloud.x;
+      const std::vector<double>& a = cloud.a;
       Domain dom;
       dom.kind = Domain::Kind::periodic;
       dom.box = Vec3(L, L, L);

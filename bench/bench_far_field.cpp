@@ -29,15 +29,10 @@ int main(int argc, char** argv) {
   for (Moments m : {Moments::F, Moments::FT, Moments::FTS}) {
     for (long n : sizes) {
       // Random non-overlapping-ish cloud at volume fraction 0.1, radii 0.5-1.5.
-      std::mt19937_64 rng(n);
-      std::uniform_real_distribution<double> u(0, 1);
       const double L = std::cbrt(double(n) * 4.19 / 0.1);
-      std::vector<Vec3> x;
-      std::vector<double> a;
-      for (long i = 0; i < n; ++i) {
-        x.emplace_back(L * u(rng), L * u(rng), L * u(rng));
-        a.push_back(0.5 + u(rng));
-      }
+      const bench::Cloud cloud = bench::random_cloud(n, L, std::uint64_t(n));
+      const std::vector<Vec3>& x = cloud.x;
+      const std::vector<double>& a = cloud.a;
       VecX v = VecX::Random(n * dof_per_particle(m)), y;
       for (int threads = 1; threads <= max_threads; ++threads) {
         omp_set_num_threads(threads);

@@ -11,10 +11,23 @@
 #include <ctime>
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <sstream>
 #include <thread>
 
 namespace stokesian::bench {
+
+Cloud random_cloud(long n, double L, unsigned long seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0, 1);
+  Cloud c;
+  for (long i = 0; i < n; ++i) {
+    const double x = L * u(rng), y = L * u(rng), z = L * u(rng);
+    c.x.emplace_back(x, y, z);
+    c.a.push_back(0.5 + u(rng));
+  }
+  return c;
+}
 
 Options parse_options(int argc, char** argv) {
   Options o;

@@ -4,6 +4,7 @@
 // direct, 2 threads vs 1) because shared machines are noisy.
 #include <algorithm>
 #include <chrono>
+#include <Eigen/Dense>
 #include <map>
 #include <string>
 #include <vector>
@@ -17,6 +18,14 @@ struct Options {
   std::string out = "bench/results";
 };
 Options parse_options(int argc, char** argv);
+
+// Random cloud shared by the far-field drivers: n centres uniform in the cube [0, L)^3 (overlaps
+// allowed) and radii uniform in [0.5, 1.5] (<a^3> = 1.25), drawn from std::mt19937_64(seed).
+struct Cloud {
+  std::vector<Eigen::Vector3d> x;
+  std::vector<double> a;
+};
+Cloud random_cloud(long n, double L, unsigned long seed);
 
 // Machine and build metadata: host, CPU model, logical cores, OpenMP max threads, compiler,
 // build type, git revision, UTC date.
