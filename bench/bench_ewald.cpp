@@ -24,7 +24,7 @@
 // core: about 0.1 ms per pair for F, 0.6 ms for FTS), so its quick sizes stop at 100; the full run
 // goes to 400 (FTS build there: ~1-2 minutes).
 #include "bench/harness.hpp"
-#include "engine/far_field.hpp"
+#include "engine/kernels/far_field.hpp"
 #include "ewald/ewald_reference.hpp"
 #include "ewald/pme.hpp"
 

@@ -5,7 +5,7 @@
 // "dense_matvec" (M x with the assembled matrix).
 //   bench_far_field [--quick] [--out DIR]
 #include "bench/harness.hpp"
-#include "engine/far_field.hpp"
+#include "engine/kernels/far_field.hpp"
 #include "engine/simulation.hpp"
 #include "io/scene_toml.hpp"
 
@@ -44,7 +44,7 @@ int main(int argc, char** argv) {
           t << "[particles]\ngenerate = \"random\"\ncount = " << n << "\nvolume_fraction = 0.1\nseed = 3\n"
             << "[forces]\nexternal_force = [0.0, 0.0, -1.0]\n[hydrodynamics]\nmodel = \"far_field\"\nmoments = \""
             << to_string(m) << "\"\ntolerance = 1e-6\n[time]\ndt = 0.01\n";
-          const Simulation sim(io::parse_scene(t.str(), "bench.toml"));
+          Simulation sim(io::parse_scene(t.str(), "bench.toml"));
           State s = sim.initial_state();
           std::mt19937_64 r(1);
           phases["step"] = bench::median_time([&] { sim.advance(s, sim.evaluate(s, s.position), r); }, n <= 800 ? 3 : 1);

@@ -9,7 +9,7 @@
 // resistance (the near-field part of the seed's preconditioner, seed 1 eq. 2.46). Fill = nnz(L).
 //   bench_near_field [--quick] [--out DIR]
 #include "bench/harness.hpp"
-#include "engine/placement.hpp"
+#include "trees/placement.hpp"
 #include "lubrication/cholmod_factor.hpp"
 #include "lubrication/near_field.hpp"
 #include "trees/neighbor_list.hpp"

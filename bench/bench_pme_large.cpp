@@ -3,7 +3,7 @@
 // (which stops at N = 8000) to the 10^5 end of the time-against-N chart. Phases: "setup", "product".
 //   bench_pme_large [--quick] [--out DIR]      (--quick: N = 16000 only)
 #include "bench/harness.hpp"
-#include "engine/far_field.hpp"
+#include "engine/kernels/far_field.hpp"
 #include "ewald/pme.hpp"
 
 #include <omp.h>

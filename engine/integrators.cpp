@@ -1,6 +1,6 @@
 #include "engine/integrators.hpp"
 
-#include "engine/errors.hpp"
+#include "engine/core/errors.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -57,6 +57,34 @@ RkfStep rkf45_step(const VelocityField& U, const std::vector<Vec3>& x0, const st
       throw PhysicsError(o.str());
     }
   }
+}
+
+namespace {
+// Adds the Brownian displacement (if any) drawn at the start of the step.
+void add_noise(const State& s, Dynamics& d, double dt, Rng& rng, std::vector<Vec3>& x1) {
+  const std::vector<Vec3> dX = d.brownian_displacement(s, dt, rng);
+  for (std::size_t i = 0; i < dX.size(); ++i) x1[i] += dX[i];
+}
+}  // namespace
+
+StepResult EulerIntegrator::step(const State& s, const Evaluation& start, Dynamics& d, Rng& rng) {
+  StepResult r{axpy(s.position, s.dt, start.hydro.U), s.dt, s.dt};
+  add_noise(s, d, s.dt, rng, r.x);
+  return r;
+}
+
+StepResult MidpointIntegrator::step(const State& s, const Evaluation& start, Dynamics& d, Rng& rng) {
+  const double dt = s.dt;
+  const std::vector<Vec3> xmid = axpy(s.position, 0.5 * dt, start.hydro.U);
+  StepResult r{axpy(s.position, dt, d.evaluate(s, xmid, 0.5 * dt).hydro.U), dt, dt};
+  add_noise(s, d, dt, rng, r.x);
+  return r;
+}
+
+StepResult Rkf45Integrator::step(const State& s, const Evaluation& start, Dynamics& d, Rng&) {
+  const VelocityField U = [&](const std::vector<Vec3>& x, double t) { return d.evaluate(s, x, t).hydro.U; };
+  RkfStep k = rkf45_step(U, s.position, start.hydro.U, s.dt, tol_, dt_min_);
+  return StepResult{std::move(k.x), k.dt_used, k.dt_next};
 }
 
 }  // namespace stokesian

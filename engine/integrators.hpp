@@ -1,22 +1,62 @@
 #pragma once
-// Time integrators for dx/dt = U(x) (+ Brownian displacement).
-//   euler:    x1 = x0 + dt U(x0) + dX_B                       (Euler-Maruyama)
-//   midpoint: x1 = x0 + dt U(x0 + dt/2 U(x0), t0 + dt/2) + dX_B (deterministic part 2nd order)
-//   rkf45:    Runge-Kutta-Fehlberg 4(5) with step-size control (Fehlberg 1969; thesis s.2.3.3):
-//             the 4th-order solution is kept, the embedded 5th-order one estimates the local
-//             error e = max_i |x5_i - x4_i|; a step is accepted when e <= tol and the next
-//             dt = dt * clamp(0.9 (tol/e)^(1/5), 0.2, 5).
-// dX_B = sqrt(2 kT dt) M^{1/2}(x0) W. M_inf is divergence free, so Euler-Maruyama has no
-// thermal drift term (shared/notes/method.md s.5 needs one only with the near field).
-#include "engine/types.hpp"
+// Time integrators for dx/dt = U(x, t) (+ Brownian displacement), one class per scheme, registered
+// by name (engine/methods.cpp). An integrator owns its stages: it asks the Dynamics for velocities
+// at stage positions and times, and decides where the Brownian displacement enters.
+//   euler:    x1 = x0 + dt U(x0) + dX_B                            (Euler-Maruyama)
+//   midpoint: x1 = x0 + dt U(x0 + dt/2 U(x0), t0 + dt/2) + dX_B     (deterministic part 2nd order)
+//   rkf45:    Runge-Kutta-Fehlberg 4(5) with step-size control (Fehlberg 1969): the 4th-order
+//             solution is kept, the embedded 5th-order one estimates the local error
+//             e = max_i |x5_i - x4_i|; a step is accepted when e <= tol and the next
+//             dt = dt * clamp(0.9 (tol/e)^(1/5), 0.2, 5). Deterministic only.
+// dX_B = sqrt(2 kT dt) M^{1/2}(x0) W (Dynamics::brownian_displacement). With the far field alone
+// M is divergence free and Euler-Maruyama needs no drift; a solver with near-field resistance
+// (HydroSolver::needs_drift) needs a drift-corrected scheme (Fixman midpoint or random finite
+// differences), which is a further integrator here.
+#include "engine/dynamics.hpp"
 
 #include <functional>
 #include <vector>
 
 namespace stokesian {
 
-// Velocities at positions x and time t0 + t (t measured from the start of the step; the time
-// enters through the Lees-Edwards strain of sheared boxes).
+struct StepResult {
+  std::vector<Vec3> x;  // new positions
+  double dt_used = 0;   // the step that was taken
+  double dt_next = 0;   // proposal for the next step
+};
+
+class Integrator {
+ public:
+  virtual ~Integrator() = default;
+  virtual const char* name() const = 0;
+  // One step from s (positions, time, dt); `start` is the evaluation at s.position, t = 0.
+  virtual StepResult step(const State& s, const Evaluation& start, Dynamics& d, Rng& rng) = 0;
+};
+
+class EulerIntegrator final : public Integrator {
+ public:
+  const char* name() const override { return "euler"; }
+  StepResult step(const State& s, const Evaluation& start, Dynamics& d, Rng& rng) override;
+};
+
+class MidpointIntegrator final : public Integrator {
+ public:
+  const char* name() const override { return "midpoint"; }
+  StepResult step(const State& s, const Evaluation& start, Dynamics& d, Rng& rng) override;
+};
+
+class Rkf45Integrator final : public Integrator {
+ public:
+  // tol: local error per step [a]; dt_min: smallest step before giving up.
+  Rkf45Integrator(double tol, double dt_min) : tol_(tol), dt_min_(dt_min) {}
+  const char* name() const override { return "rkf45"; }
+  StepResult step(const State& s, const Evaluation& start, Dynamics& d, Rng& rng) override;
+
+ private:
+  double tol_, dt_min_;
+};
+
+// Velocities at positions x and time t into the step (t measured from the start of the step).
 using VelocityField = std::function<std::vector<Vec3>(const std::vector<Vec3>& x, double t)>;
 
 std::vector<Vec3> axpy(const std::vector<Vec3>& x, double h, const std::vector<Vec3>& u);

@@ -1,7 +1,8 @@
 #include "engine/model.hpp"
 
-#include "engine/errors.hpp"
-#include "engine/flow.hpp"
+#include "engine/core/errors.hpp"
+#include "engine/core/flow.hpp"
+#include "engine/methods.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -9,37 +10,11 @@
 
 namespace stokesian {
 
-const char* to_string(HydroModel m) {
-  switch (m) {
-    case HydroModel::auto_: return "auto";
-    case HydroModel::free_draining: return "free_draining";
-    case HydroModel::far_field: return "far_field";
-    case HydroModel::stokesian: return "stokesian";
-  }
-  return "?";
-}
-
-const char* to_string(FarFieldMethod m) {
-  switch (m) {
-    case FarFieldMethod::auto_: return "auto";
-    case FarFieldMethod::direct: return "direct";
-    case FarFieldMethod::ewald: return "ewald";
-    case FarFieldMethod::pme: return "pme";
-    case FarFieldMethod::tree: return "tree";
-  }
-  return "?";
-}
-
-std::string ResolvedModel::describe() const {
-  std::ostringstream o;
-  o << "hydrodynamics: " << to_string(level) << "\nmoments: " << to_string(moments);
-  if (level != HydroModel::free_draining) o << "\nfar_field: " << to_string(far_field);
-  o << "\nbrownian: " << (brownian ? "yes" : "no");
-  for (const auto& r : reasons) o << "\n  - " << r;
-  return o.str();
-}
-
 namespace {
+
+// A pair closer than this surface gap [a] makes the auto level choose Stokesian dynamics: below
+// about half a radius the far field alone misses the lubrication forces by more than a few percent.
+constexpr double kNearGap = 0.5;
 
 // Smallest surface gap over all pairs (open or minimum image), O(N^2) but run once per scene.
 double min_gap(const Scene& s) {
@@ -50,11 +25,58 @@ double min_gap(const Scene& s) {
   return g;
 }
 
-[[noreturn]] void unavailable(const Scene& s, const std::string& key, const std::string& what) {
-  throw ConfigError(s.source + ": [hydrodynamics] " + key + ": " + what);
+[[noreturn]] void unavailable(const Scene& s, const std::string& table, const std::string& key, const std::string& what) {
+  throw ConfigError(s.where(table, key) + ": " + what);
+}
+
+// Why `e` cannot solve this scene ("" if it can).
+std::string unusable(const SolverEntry& e, const Scene& s, bool brownian) {
+  const std::size_t n = s.positions.size();
+  const std::size_t limit = s.domain.periodic() ? e.max_periodic : e.max_open;
+  if (brownian && !e.brownian) return "it does not sample Brownian motion";
+  if (limit > 0 && n > limit) return "it is limited to N <= " + std::to_string(limit) + " (N = " + std::to_string(n) + ")";
+  return "";
+}
+
+const SolverEntry* usable_solver(HydroModel level, const Scene& s, bool brownian, std::string* why) {
+  std::string all;
+  for (const auto& e : hydro_solvers().entries()) {
+    if (e.level != level) continue;
+    const std::string u = unusable(e, s, brownian);
+    if (u.empty()) return &e;
+    all += (all.empty() ? "" : "; ") + e.name + ": " + u;
+  }
+  if (why) *why = all;
+  return nullptr;
 }
 
 }  // namespace
+
+std::string solver_of(const ResolvedModel& m) {
+  if (!m.solver.empty()) return m.solver;
+  for (const auto& e : hydro_solvers().entries())
+    if (e.level == m.level) return e.name;
+  return "";
+}
+
+std::string ResolvedModel::describe() const {
+  std::ostringstream o;
+  o << "hydrodynamics: " << name_of(level) << "\nsolver: " << solver_of(*this) << "\nmoments: " << name_of(moments);
+  if (level != HydroModel::free_draining) o << "\nfar_field: " << far_field;
+  o << "\nbrownian: " << (brownian ? "yes" : "no") << "\nintegrator: " << integrator;
+  for (const auto& r : reasons) o << "\n  - " << r;
+  return o.str();
+}
+
+ModelKey ResolvedModel::key() const {
+  ModelKey k;
+  k.entries = {{"hydrodynamics", name_of(level)},
+               {"solver", solver_of(*this)},
+               {"moments", name_of(moments)},
+               {"far_field", level == HydroModel::free_draining ? "none" : far_field},
+               {"brownian", brownian ? "yes" : "no"}};
+  return k;
+}
 
 ResolvedModel resolve_model(const Scene& s) {
   ResolvedModel m;
@@ -64,9 +86,7 @@ ResolvedModel resolve_model(const Scene& s) {
   m.fixed_particles = std::any_of(s.fixed.begin(), s.fixed.end(), [](char c) { return c != 0; });
   m.reasons.push_back(m.brownian ? "fluid.kT > 0: Brownian motion on" : "fluid.kT = 0: athermal");
 
-  // Level.
-  // Dense SD is O(N^3) in time and O(N^2) memory; in periodic boxes M_inf is the dense Ewald sum.
-  const std::size_t kDenseSdLimit = s.domain.periodic() ? 500 : 2000;
+  // Level and solver.
   if (s.hydro.model == HydroModel::auto_) {
     if (n <= 1) {
       m.level = HydroModel::free_draining;
@@ -74,34 +94,38 @@ ResolvedModel resolve_model(const Scene& s) {
     } else {
       const double g = min_gap(s);
       std::ostringstream r;
-      const bool near = g < 0.5 || !s.forces.pair.empty();
-      if (near && !m.brownian && n <= kDenseSdLimit) {
+      const bool near = g < kNearGap || !s.forces.pair.empty();
+      std::string why;
+      const SolverEntry* sd = near ? usable_solver(HydroModel::stokesian, s, m.brownian, &why) : nullptr;
+      if (sd) {
         m.level = HydroModel::stokesian;
-        r << "auto level: " << (g < 0.5 ? "close pairs (smallest gap " : "pair forces bring particles together (smallest gap ")
-          << g << " a) -> stokesian (far field + lubrication, dense solver for N = " << n << ")";
+        r << "auto level: " << (g < kNearGap ? "close pairs (smallest gap " : "pair forces bring particles together (smallest gap ")
+          << g << " a) -> stokesian (far field + lubrication, solver " << sd->name << " for N = " << n << ")";
       } else {
         m.level = HydroModel::far_field;
         r << "auto level: " << n << " particles interact hydrodynamically -> far_field";
-        if (near) {
-          r << " (lubrication would be more accurate";
-          if (m.brownian) r << ", but Brownian Stokesian dynamics is not in this version";
-          else r << ", but N > " << kDenseSdLimit << " needs the accelerated solver, not in this version";
-          r << "; set model = \"far_field\" to silence)";
-        }
+        if (near)
+          r << " (lubrication would be more accurate, but no Stokesian-dynamics solver applies: " << why
+            << "; set model = \"far_field\" to silence)";
       }
       m.reasons.push_back(r.str());
     }
   } else {
     m.level = s.hydro.model;
-    m.reasons.push_back(std::string("level set by scene: ") + to_string(m.level));
+    m.reasons.push_back(std::string("level set by scene: ") + name_of(m.level));
   }
-  if (m.level == HydroModel::stokesian) {
-    if (m.brownian)
-      unavailable(s, "model", "\"stokesian\" with fluid.kT > 0 needs near-field Brownian forces and drift, not in this "
-                              "version; use \"far_field\" or kT = 0");
-    if (n > kDenseSdLimit)
-      unavailable(s, "model", "\"stokesian\" uses the dense reference solver, limited to N <= " +
-                              std::to_string(kDenseSdLimit) + " in this version (N = " + std::to_string(n) + ")");
+  {
+    std::string why;
+    const SolverEntry* e = usable_solver(m.level, s, m.brownian, &why);
+    if (!e) {
+      if (m.level == HydroModel::stokesian && m.brownian)
+        unavailable(s, "hydrodynamics", "model",
+                    "\"stokesian\" with fluid.kT > 0 needs near-field Brownian forces and drift, which no solver "
+                    "provides (" + why + "); use \"far_field\" or kT = 0");
+      unavailable(s, "hydrodynamics", "model", std::string("no solver for \"") + name_of(m.level) + "\": " + why);
+    }
+    m.solver = e->name;
+    m.reasons.push_back("solver: " + e->name + " (" + e->description + ")");
   }
 
   // Moments.
@@ -128,55 +152,74 @@ ResolvedModel resolve_model(const Scene& s) {
   } else {
     m.moments = s.hydro.moments == MomentChoice::F ? Moments::F
               : s.hydro.moments == MomentChoice::FT ? Moments::FT : Moments::FTS;
-    m.reasons.push_back(std::string("moments set by scene: ") + to_string(m.moments));
+    m.reasons.push_back(std::string("moments set by scene: ") + name_of(m.moments));
     if (torques && m.moments == Moments::F)
-      unavailable(s, "moments", "\"F\" ignores the scene's external torques; use \"FT\" or \"FTS\"");
+      unavailable(s, "hydrodynamics", "moments", "\"F\" ignores the scene's external torques; use \"FT\" or \"FTS\"");
     if (m.level == HydroModel::stokesian && m.moments == Moments::F)
       m.reasons.push_back("note: F-level Stokesian dynamics treats the spheres as non-rotating");
   }
 
   // Far-field method.
   if (m.level != HydroModel::free_draining) {
-    const FarFieldMethod want = s.hydro.far_field;
-    if (want == FarFieldMethod::tree)
-      unavailable(s, "far_field", "\"tree\" is not in this version; available: \"direct\" (open), \"pme\" and "
-                                  "\"ewald\" (periodic), \"auto\"");
-    if (s.domain.periodic()) {
-      if (want == FarFieldMethod::direct)
-        unavailable(s, "far_field", "\"direct\" has no periodic images; periodic boxes use \"pme\" or \"ewald\"");
-      if (m.level == HydroModel::stokesian) {
-        m.far_field = FarFieldMethod::ewald;
-        m.reasons.push_back("far_field: dense Stokesian dynamics inverts the dense Ewald-summed mobility");
-      } else if (want == FarFieldMethod::ewald) {
-        m.far_field = FarFieldMethod::ewald;
-        m.reasons.push_back("far_field set by scene: ewald (dense reference, O(N^2) memory)");
-      } else {
-        m.far_field = FarFieldMethod::pme;
-        m.reasons.push_back(want == FarFieldMethod::auto_
-                                ? "auto far_field: periodic box -> pme (O(N log N), accuracy from tolerance)"
-                                : "far_field set by scene: pme");
-      }
-    } else {
-      if (want == FarFieldMethod::ewald || want == FarFieldMethod::pme)
-        unavailable(s, "far_field", std::string("\"") + to_string(want) +
-                                        "\" needs a periodic domain; open domains use \"direct\" or \"auto\"");
-      m.far_field = FarFieldMethod::direct;
-      m.reasons.push_back(want == FarFieldMethod::auto_
-                              ? "auto far_field: open domain -> direct O(N^2) summation (the tree method is not in this version)"
-                              : "far_field set by scene: direct");
+    const auto& methods = far_field_methods();
+    const SolverEntry& solver = *hydro_solvers().find(m.solver);
+    const bool periodic = s.domain.periodic();
+    const std::string& want = s.hydro.far_field;
+    const FarFieldMethodEntry* asked = nullptr;
+    std::vector<std::string> fitting;  // methods for this domain kind
+    for (const auto& e : methods.entries())
+      if (e.periodic == periodic) fitting.push_back(e.name);
+    if (want != "auto") {
+      asked = methods.find(want);
+      std::vector<std::string> all{"auto"};
+      for (const auto& e : methods.names()) all.push_back(e);
+      if (!asked) unavailable(s, "hydrodynamics", "far_field", "\"" + want + "\" is not in this version (available: " + quoted_list(all) + ")");
+      if (asked->periodic != periodic)
+        unavailable(s, "hydrodynamics", "far_field",
+                    "\"" + want + (periodic ? "\" has no periodic images; periodic boxes use " : "\" needs a periodic domain; open domains use ") +
+                        quoted_list(fitting) + " or \"auto\"");
     }
+    const FarFieldMethodEntry* chosen = nullptr;
+    if (solver.needs_dense && !(asked && asked->dense)) {
+      for (const auto& e : methods.entries())
+        if (e.periodic == periodic && e.dense && !chosen) chosen = &e;
+      m.reasons.push_back("far_field: " + solver.name + " inverts the dense matrix of " + chosen->name +
+                          (asked ? " (\"" + want + "\" has no dense matrix)" : ""));
+    } else if (asked) {
+      chosen = asked;
+      m.reasons.push_back("far_field set by scene: " + chosen->name);
+    } else {
+      for (const auto& e : methods.entries())
+        if (e.periodic == periodic && e.auto_choice && !chosen) chosen = &e;
+      m.reasons.push_back(std::string("auto far_field: ") + (periodic ? "periodic box" : "open domain") + " -> " +
+                          chosen->name + " (" + chosen->description + ")");
+    }
+    m.far_field = chosen->name;
     if (m.level == HydroModel::stokesian)
       m.reasons.push_back("near field: exact two-sphere resistance minus the two-body far field, pairs with "
                           "2r/(a_i+a_j) < lubrication_cutoff");
     if (m.brownian && m.moments == Moments::FTS)
-      unavailable(s, "moments", "Brownian motion with rigid-particle stresslets (FTS) needs the Stokesian-dynamics "
-                                "Brownian solver of a later version; use moments = \"FT\" or kT = 0");
+      unavailable(s, "hydrodynamics", "moments",
+                  "Brownian motion with rigid-particle stresslets (FTS) needs a Stokesian-dynamics Brownian solver, "
+                  "which no solver provides; use moments = \"FT\" or kT = 0");
     if (m.brownian && m.fixed_particles)
-      unavailable(s, "model", "Brownian motion with fixed particles at the far-field level is not in this version");
+      unavailable(s, "hydrodynamics", "model", "Brownian motion with fixed particles needs a constrained Brownian "
+                                               "solver, which no solver provides");
   }
-  if (m.brownian && s.time.integrator == Integrator::rkf45)
-    throw ConfigError(s.source + ": [time] integrator: \"rkf45\" is deterministic; with fluid.kT > 0 use "
-                                 "\"euler\" or \"midpoint\"");
+
+  // Integrator.
+  const IntegratorEntry* integ = integrators().find(s.time.integrator);
+  if (!integ)
+    unavailable(s, "time", "integrator", "\"" + s.time.integrator + "\" is not one of " + quoted_list(integrators().names()));
+  m.integrator = integ->name;
+  if (m.brownian && !integ->stochastic)
+    unavailable(s, "time", "integrator", "\"" + integ->name + "\" is deterministic; with fluid.kT > 0 use " +
+                                             [] {
+                                               std::vector<std::string> ok;
+                                               for (const auto& e : integrators().entries())
+                                                 if (e.stochastic) ok.push_back(e.name);
+                                               return quoted_list(ok);
+                                             }());
   return m;
 }
 

@@ -1,9 +1,12 @@
 #pragma once
-// Resolution of a scene to the cheapest adequate hydrodynamic model (shared/notes/method.md s.1):
-// level (free draining -> far field -> Stokesian dynamics), moments (F -> FT -> FTS), far-field
-// method, Brownian or not. Every choice carries its reason; explicit scene settings override the
-// automatic choice, and a setting the engine cannot honour is a ConfigError, never a fallback.
-#include "engine/scene.hpp"
+// Resolution of a scene to the cheapest adequate hydrodynamic model (docs/stokesian_dynamics.md):
+// level (free draining -> far field -> Stokesian dynamics), solver, moments (F -> FT -> FTS),
+// far-field method, integrator, Brownian or not. Choices are made over the registries of
+// engine/methods.hpp; every choice carries its reason; explicit scene settings override the
+// automatic choice, and a setting the engine cannot honour is a ConfigError naming file, line and
+// key, never a fallback.
+#include "engine/core/output.hpp"
+#include "engine/core/scene.hpp"
 
 #include <string>
 #include <vector>
@@ -12,19 +15,21 @@ namespace stokesian {
 
 struct ResolvedModel {
   HydroModel level = HydroModel::free_draining;
+  std::string solver;                // registered solver; empty = the level's first solver
   Moments moments = Moments::F;
-  FarFieldMethod far_field = FarFieldMethod::direct;  // meaningful for far_field / stokesian
+  std::string far_field = "direct";  // registered far-field method (unused at free draining)
+  std::string integrator = "euler";
   bool brownian = false;
   bool fixed_particles = false;
   std::vector<std::string> reasons;  // one line per decision
   std::string describe() const;      // multi-line, printed by `stokesian check` and stored in outputs
+  ModelKey key() const;              // the run's identity for resume
 };
 
-const char* to_string(HydroModel m);
-const char* to_string(FarFieldMethod m);
-
-// Throws ConfigError (naming scene.source and the key) when the scene asks for something the
-// engine does not provide.
+// Throws ConfigError when the scene asks for something the engine does not provide.
 ResolvedModel resolve_model(const Scene& scene);
+
+// The solver a model names, or the first registered solver of its level.
+std::string solver_of(const ResolvedModel& m);
 
 }  // namespace stokesian

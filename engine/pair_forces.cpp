@@ -1,6 +1,8 @@
 // Pair-force evaluators and the shared pair loop; the mathematics is stated in pair_forces.hpp.
 #include "engine/pair_forces.hpp"
 
+#include "engine/core/parallel.hpp"
+
 #include "trees/neighbor_list.hpp"
 
 #include <algorithm>
@@ -149,20 +151,16 @@ double vdw_range(double a, double tol, double h_start) {
 
 }  // namespace
 
+double MorseLaw::default_cutoff(double, double tol) const { return std::log(2.0 / tol) / kappa; }
+
+double DlvoLaw::default_cutoff(double a_max, double tol) const {
+  const double h_dl = std::log(1.0 / tol) / kappa;
+  const double h_vdw = a_max > 0.0 ? vdw_range(a_max, tol, min_gap) : 0.0;
+  return std::max({h_dl, h_vdw, 2.0 * min_gap});
+}
+
 double default_cutoff(const PairForceParams& p, double a_max) {
-  const double tol = kDefaultCutoffTolerance;
-  switch (p.kind) {
-    case PairForceParams::Kind::morse:
-      return std::log(2.0 / tol) / p.morse_kappa;
-    case PairForceParams::Kind::dlvo: {
-      const double h_dl = std::log(1.0 / tol) / p.debye_kappa;
-      const double h_vdw = a_max > 0.0 ? vdw_range(a_max, tol, p.min_gap) : 0.0;
-      return std::max({h_dl, h_vdw, 2.0 * p.min_gap});
-    }
-    case PairForceParams::Kind::hertz:
-      return 0.0;
-  }
-  return 0.0;
+  return with_law(p, [&](const auto& law) { return law.default_cutoff(a_max, kDefaultCutoffTolerance); });
 }
 
 double resolved_cutoff(const PairForceParams& p, double a_max) {
@@ -188,7 +186,7 @@ void accumulate(const Law& law, double cutoff_gap, const std::vector<trees::Neig
   const long n = static_cast<long>(pairs.size());
   std::vector<EnergyDerivative> e(pairs.size());
   // Independent per-pair evaluation; the scatter below is serial so sums do not depend on threads.
-#pragma omp parallel for schedule(static) if (n >= 2048)  // threads only pay off for many pairs
+#pragma omp parallel for schedule(static) if (n >= parallel::kPairForcePairs)
   for (long k = 0; k < n; ++k) {
     const auto& p = pairs[k];
     e[k] = shifted(law, cutoff_gap, p.dist, radius[p.i], radius[p.j]);
@@ -210,15 +208,7 @@ void accumulate(const Law& law, double cutoff_gap, const std::vector<trees::Neig
 }  // namespace
 
 EnergyDerivative pair_energy(const PairForceParams& p, double cutoff_gap, double r, double ai, double aj) {
-  switch (p.kind) {
-    case PairForceParams::Kind::morse:
-      return shifted(morse_law(p), cutoff_gap, r, ai, aj);
-    case PairForceParams::Kind::dlvo:
-      return shifted(dlvo_law(p), cutoff_gap, r, ai, aj);
-    case PairForceParams::Kind::hertz:
-      return shifted(hertz_law(p), cutoff_gap, r, ai, aj);
-  }
-  return {};
+  return with_law(p, [&](const auto& law) { return shifted(law, cutoff_gap, r, ai, aj); });
 }
 
 void add_pair_forces(const std::vector<PairForceParams>& laws, const std::vector<Vec3>& x,
@@ -238,19 +228,8 @@ void add_pair_forces(const std::vector<PairForceParams>& laws, const std::vector
   for (std::size_t l = 0; l < laws.size(); ++l) search = std::max(search, cut[l] = resolved_cutoff(laws[l], a_max));
 
   const auto pairs = trees::neighbor_pairs(x, radius, domain, search);
-  for (std::size_t l = 0; l < laws.size(); ++l) {
-    switch (laws[l].kind) {
-      case PairForceParams::Kind::morse:
-        accumulate(morse_law(laws[l]), cut[l], pairs, radius, force, totals);
-        break;
-      case PairForceParams::Kind::dlvo:
-        accumulate(dlvo_law(laws[l]), cut[l], pairs, radius, force, totals);
-        break;
-      case PairForceParams::Kind::hertz:
-        accumulate(hertz_law(laws[l]), cut[l], pairs, radius, force, totals);
-        break;
-    }
-  }
+  for (std::size_t l = 0; l < laws.size(); ++l)
+    with_law(laws[l], [&](const auto& law) { accumulate(law, cut[l], pairs, radius, force, totals); });
 }
 
 }  // namespace stokesian::forces

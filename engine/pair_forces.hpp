@@ -39,9 +39,9 @@
 // Cut-off (cut and shift): U_c(r) = U(r) - U(a_i + a_j + h_c) for h < h_c, 0 beyond; the force is
 // the exact derivative of U_c below h_c and jumps by the (small) force at h_c. Default h_c keeps
 // each term below kDefaultCutoffTolerance of its energy scale (default_cutoff).
-#include "engine/scene.hpp"
-#include "engine/state.hpp"
-#include "engine/types.hpp"
+#include "engine/core/scene.hpp"
+#include "engine/core/domain.hpp"
+#include "engine/core/types.hpp"
 
 #include <vector>
 
@@ -60,9 +60,12 @@ EnergyDerivative double_layer_hhf(double r, double ai, double aj, double Z, doub
 EnergyDerivative double_layer_lsa(double r, double ai, double aj, double Z, double kappa, double psi_reduced);
 
 // ---- Evaluators: the formula only, (r, a_i, a_j) -> (U, dU/dr), no cut-off ----
+// Each law also gives its default gap cut-off [a] for spheres up to radius a_max: the gap beyond
+// which every term is below `tol` of its energy scale.
 struct MorseLaw {
   double depth, kappa;  // V0 [kT], kappa [1/a]
   EnergyDerivative operator()(double r, double ai, double aj) const;
+  double default_cutoff(double a_max, double tol) const;  // ln(2/tol)/kappa
 };
 
 struct DlvoLaw {  // includes the min-gap floor
@@ -70,11 +73,15 @@ struct DlvoLaw {  // includes the min-gap floor
   PairForceParams::DoubleLayer double_layer;
   EnergyDerivative operator()(double r, double ai, double aj) const;
   EnergyDerivative unregularised(double r, double ai, double aj) const;
+  // max(ln(1/tol)/kappa (double layer, relative to 2 Z a_eff), gap where |U_vdW(a_max, a_max)| =
+  // tol A, 2 min_gap); Born is far shorter-ranged.
+  double default_cutoff(double a_max, double tol) const;
 };
 
 struct HertzLaw {
   double stiffness;  // k_H [kT/a^{5/2}]
   EnergyDerivative operator()(double r, double ai, double aj) const;
+  double default_cutoff(double, double) const { return 0.0; }  // contact only
 };
 
 // Build the evaluators; throw std::invalid_argument for kappa <= 0 or (DLVO) min_gap <= 0.
@@ -82,12 +89,22 @@ MorseLaw morse_law(const PairForceParams& p);
 DlvoLaw dlvo_law(const PairForceParams& p);
 HertzLaw hertz_law(const PairForceParams& p);
 
+// The one dispatch from a law's parameters to its evaluator: f(law) with the law of p.kind.
+template <class F>
+decltype(auto) with_law(const PairForceParams& p, F&& f) {
+  switch (p.kind) {
+    case PairForceParams::Kind::morse: return f(morse_law(p));
+    case PairForceParams::Kind::dlvo: return f(dlvo_law(p));
+    case PairForceParams::Kind::hertz: break;
+  }
+  return f(hertz_law(p));
+}
+
 // Relative energy left at the default cut-off.
 constexpr double kDefaultCutoffTolerance = 1e-4;
 
-// Default gap cut-off [a] for spheres up to radius a_max: Morse ln(2/tol)/kappa; DLVO the larger of
-// ln(1/tol)/kappa (double layer, relative to its contact scale 2 Z a_eff) and the gap where
-// |U_vdW(a_max, a_max)| = tol A (Born is far shorter-ranged); Hertz 0.
+// Default gap cut-off [a] for spheres up to radius a_max (the law's default_cutoff at
+// kDefaultCutoffTolerance).
 double default_cutoff(const PairForceParams& p, double a_max);
 // p.cutoff if positive, else default_cutoff. Hertz: max(p.cutoff, 0).
 double resolved_cutoff(const PairForceParams& p, double a_max);

@@ -1,83 +1,108 @@
 #include "engine/sd_dense.hpp"
 
-#include "engine/errors.hpp"
-#include "engine/far_field.hpp"
+#include "engine/core/errors.hpp"
+#include "engine/kernels/far_field.hpp"
 #include "ewald/ewald_reference.hpp"
 
 #include <sstream>
 
 namespace stokesian {
 
+DenseStokesianDynamics::DenseStokesianDynamics(std::unique_ptr<MobilityOperator> far_field, double mu,
+                                               lubrication::NearFieldParams p)
+    : m_(far_field->moments()), mu_(mu), op_(std::move(far_field)), near_(m_, mu, p) {}
+
 DenseStokesianDynamics::DenseStokesianDynamics(Moments m, double mu, const AmbientFlow& flow,
                                                lubrication::NearFieldParams p)
-    : m_(m), mu_(mu), flow_(flow), near_(m, mu, p) {}
+    : m_(m), mu_(mu), flow_(flow), reference_(true), near_(m, mu, p) {}
+
+void DenseStokesianDynamics::select_reference_operator(const Domain& domain) {
+  const MobilitySpec spec{m_, mu_, 0.0};
+  if (domain.periodic() && !dynamic_cast<ewald::EwaldFarField*>(op_.get()))
+    op_ = std::make_unique<ewald::EwaldFarField>(spec);
+  else if (!domain.periodic() && !dynamic_cast<DirectFarField*>(op_.get()))
+    op_ = std::make_unique<DirectFarField>(spec);
+}
+
+void DenseStokesianDynamics::prepare(const Configuration& c) {
+  if (reference_) select_reference_operator(c.domain);
+  op_->set_configuration(c);
+  const MatX* M = op_->dense();
+  if (!M) throw std::logic_error(std::string("dense Stokesian dynamics needs a dense far field, not \"") + op_->name() + "\"");
+  Eigen::LLT<MatX> llt(*M);
+  if (llt.info() != Eigen::Success) throw PhysicsError("far-field mobility is not positive definite");
+  R_ = llt.solve(MatX::Identity(M->rows(), M->cols()));
+  stats_ = {};
+  R_ += MatX(near_.assemble(c.x, c.a, c.domain, &stats_));
+  R_ = (0.5 * (R_ + R_.transpose())).eval();
+}
+
+HydroResult DenseStokesianDynamics::solve(const HydroProblem& p) {
+  const RigidConstraints c = RigidConstraints::of(m_, p.fixed, p.force, p.torque, p.flow);
+  const std::vector<long>& v = c.force_given;   // unknown motion
+  const std::vector<long>& k = c.motion_given;  // known motion
+  // Right-hand side f + f_B + M_inf^{-1} u_s (engine/hydro_solver.hpp).
+  VecX noise = VecX::Zero(c.force.size()), slip_force;
+  if (p.force_noise)
+    for (long q : v) noise[q] += (*p.force_noise)[q];
+  if (p.slip) {
+    slip_force = op_->dense()->llt().solve(*p.slip);
+    noise += slip_force;
+  }
+  MatX Rvv(v.size(), v.size());
+  VecX rhs(v.size());
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    double s = c.force[v[i]] + noise[v[i]];
+    for (long q : k) s -= R_(v[i], q) * c.motion[q];
+    rhs[long(i)] = s;
+    for (std::size_t j = 0; j < v.size(); ++j) Rvv(long(i), long(j)) = R_(v[i], v[j]);
+  }
+  Eigen::LLT<MatX> llt(Rvv);
+  if (llt.info() != Eigen::Success) throw PhysicsError("SD resistance matrix is not positive definite");
+  const VecX V = llt.solve(rhs);
+  VecX gen = c.motion;  // full generalised motion [U - u_inf, Omega - Omega_inf, -E_inf]
+  for (std::size_t i = 0; i < v.size(); ++i) gen[v[i]] = V[long(i)];
+  VecX moments = R_ * gen;  // f + f_B + M^{-1} u_s at given entries
+  if (p.slip) moments -= slip_force;
+  return unpack_solution(m_, p.flow, gen, moments, p.fixed);
+}
+
+std::vector<Vec3> DenseStokesianDynamics::brownian_displacement(double, double, Rng&) {
+  throw PhysicsError("dense Stokesian dynamics does not sample Brownian motion (it needs near-field noise and drift)");
+}
 
 MatX DenseStokesianDynamics::resistance(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain,
-                                        lubrication::NearFieldStats* stats) const {
-  const MatX M = domain.periodic() ? ewald::ewald_mobility(x, a, mu_, m_, domain) : dense_mobility(x, a, mu_, m_);
-  Eigen::LLT<MatX> llt(M);
-  if (llt.info() != Eigen::Success) throw PhysicsError("far-field mobility is not positive definite");
-  MatX R = llt.solve(MatX::Identity(M.rows(), M.cols()));
-  R += MatX(near_.assemble(x, a, domain, stats));
-  return 0.5 * (R + R.transpose());
+                                        lubrication::NearFieldStats* stats) {
+  prepare({x, a, domain});
+  if (stats) *stats = stats_;
+  return R_;
 }
 
 HydroResult DenseStokesianDynamics::mobility_problem(const std::vector<Vec3>& x, const std::vector<double>& a,
                                                      const std::vector<char>& fixed, const std::vector<Vec3>& F,
                                                      const std::vector<Vec3>& T, const Domain& domain,
-                                                     lubrication::NearFieldStats* stats) const {
-  const int d = dof_per_particle(m_);
-  const long n = long(x.size()), N = n * d;
-  const MatX R = resistance(x, a, domain, stats);
-  // Unknown velocity entries v (mobile particles' U, Omega) and known entries k.
-  std::vector<long> v, k;
-  VecX known = VecX::Zero(N), f = VecX::Zero(N);
-  const Vec5 Einf = to_vec5(flow_.E);
-  for (long i = 0; i < n; ++i) {
-    const bool fx = !fixed.empty() && fixed[std::size_t(i)];
-    for (int c = 0; c < std::min(d, 6); ++c) {
-      const long q = i * d + c;
-      if (fx) {
-        k.push_back(q);  // velocity relative to the ambient flow is -u_inf (particle at rest)
-        known[q] = c < 3 ? -flow_.velocity(x[std::size_t(i)])[c] : -flow_.Omega[c - 3];
-      } else {
-        v.push_back(q);
-        f[q] = c < 3 ? F[std::size_t(i)][c] : (T.empty() ? 0.0 : T[std::size_t(i)][c - 3]);
-      }
-    }
-    for (int c = 6; c < d; ++c) {
-      k.push_back(i * d + c);
-      known[i * d + c] = -Einf[c - 6];
-    }
-  }
-  MatX Rvv(v.size(), v.size());
-  VecX rhs(v.size());
-  for (std::size_t p = 0; p < v.size(); ++p) {
-    double s = f[v[p]];
-    for (long q : k) s -= R(v[p], q) * known[q];
-    rhs[long(p)] = s;
-    for (std::size_t q = 0; q < v.size(); ++q) Rvv(long(p), long(q)) = R(v[p], v[q]);
-  }
-  Eigen::LLT<MatX> llt(Rvv);
-  if (llt.info() != Eigen::Success) throw PhysicsError("SD resistance matrix is not positive definite");
-  const VecX V = llt.solve(rhs);
-  VecX gen = known;  // full generalised velocity [U - U_inf, Omega - Omega_inf, -E_inf]
-  for (std::size_t p = 0; p < v.size(); ++p) gen[v[p]] = V[long(p)];
-  return unpack_solution(m_, x, flow_, gen, R * gen, fixed);
+                                                     lubrication::NearFieldStats* stats) {
+  const Configuration c{x, a, domain};
+  prepare(c);
+  if (stats) *stats = stats_;
+  FlowSample flow;
+  flow_.sample(x, flow);
+  return solve(HydroProblem{c, fixed, flow, F, T});
 }
 
 HydroResult DenseStokesianDynamics::resistance_problem(const std::vector<Vec3>& x, const std::vector<double>& a,
                                                        const std::vector<Vec3>& U, const std::vector<Vec3>& Omega,
-                                                       const Domain& domain) const {
+                                                       const Domain& domain) {
   const int d = dof_per_particle(m_);
   const long n = long(x.size());
+  FlowSample flow;
+  flow_.sample(x, flow);
   VecX gen = VecX::Zero(n * d);
-  const Vec5 Einf = to_vec5(flow_.E);
   for (long i = 0; i < n; ++i) {
     const std::size_t s = std::size_t(i);
-    gen.segment<3>(i * d) = U[s] - flow_.velocity(x[s]);
-    if (d > 3) gen.segment<3>(i * d + 3) = (Omega.empty() ? Vec3::Zero() : Omega[s]) - flow_.Omega;
-    if (d > 6) gen.segment<5>(i * d + 6) = -Einf;
+    gen.segment<3>(i * d) = U[s] - flow.u[s];
+    if (d > 3) gen.segment<3>(i * d + 3) = (Omega.empty() ? Vec3::Zero() : Omega[s]) - flow.omega[s];
+    if (d > 6) gen.segment<5>(i * d + 6) = -flow.E[s];
   }
   const VecX FTS = resistance(x, a, domain) * gen;
   HydroResult res;

@@ -3,43 +3,65 @@
 //
 //   R = (M_inf)^{-1} + R_nf          [Durlofsky, Brady & Bossis 1987, eq. 2.17; Brady & Bossis 1988]
 //
-// with M_inf the far-field grand mobility (engine/far_field.hpp dense, or ewald/ewald_reference.hpp
-// in periodic boxes) and R_nf the pairwise
-// near-field correction (lubrication/near_field.hpp). In the generalised layout
-// [F T S] = R [U - U_inf, Omega - Omega_inf, -E_inf]:
+// with M_inf the dense far-field grand mobility of a MobilityOperator that holds it (direct in
+// open domains, Ewald in periodic boxes) and R_nf the pairwise near-field correction
+// (lubrication/near_field.hpp). In the generalised layout of engine/core/layout.hpp,
+// [F T S] = R [U - u_inf, Omega - Omega_inf, -E_inf]:
 //   resistance problem: given velocities and E_inf -> F, T, S (one product with R);
-//   mobility problem:   given F, T (mobile particles), U = Omega = 0 (fixed particles) and E_inf,
-//     the unknown velocities V of the mobile particles solve R_vv V = f - R_vk k, where k holds
-//     the known entries (-E_inf; zero velocities of fixed particles), and then the remaining
-//     rows give S and the holding forces of fixed particles. R_vv is solved by dense Cholesky.
-// O(N^3): meant for small N and as the oracle of the accelerated solver.
-#include "engine/flow.hpp"
-#include "engine/hydrodynamics.hpp"
+//   mobility problem:   the unknown motion V_v of the entries with given forces solves
+//     R_vv V_v = f_v - R_vk V_k (+ the noise terms of engine/hydro_solver.hpp), V_k the given
+//     motion (fixed particles at rest, -E_inf); the remaining rows then give S and the holding
+//     forces. R_vv is solved by dense Cholesky.
+// prepare() forms M_inf^{-1} (dense Cholesky) and assembles R_nf. O(N^3): meant for small N and
+// as the oracle of the accelerated solver.
+#include "engine/core/flow.hpp"
+#include "engine/hydro_solver.hpp"
 #include "lubrication/near_field.hpp"
+
+#include <memory>
 
 namespace stokesian {
 
-class DenseStokesianDynamics {
+class DenseStokesianDynamics final : public HydroSolver {
  public:
+  // far_field must provide dense() (direct, ewald).
+  DenseStokesianDynamics(std::unique_ptr<MobilityOperator> far_field, double mu, lubrication::NearFieldParams p = {});
+  // Reference use: direct far field in open domains, Ewald in periodic boxes (chosen per call).
   DenseStokesianDynamics(Moments m, double mu, const AmbientFlow& flow, lubrication::NearFieldParams p = {});
 
-  // R = M_inf^{-1} + R_nf; M_inf direct (open domain) or Ewald-summed (periodic, Lees-Edwards).
-  MatX resistance(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain = Domain{},
-                  lubrication::NearFieldStats* stats = nullptr) const;
+  const char* name() const override { return "dense_sd"; }
+  Moments moments() const override { return m_; }
+  void prepare(const Configuration& c) override;
+  HydroResult solve(const HydroProblem& p) override;
+  std::vector<Vec3> brownian_displacement(double kT, double dt, Rng& rng) override;
+  bool needs_drift() const override { return true; }
+  // Dense Cholesky and the near-field assembly use every thread.
+  bool prepare_uses_threads(long) const override { return true; }
+  const MobilityOperator* far_field() const override { return op_.get(); }
+  // R of the prepared configuration, and its near-field statistics.
+  const MatX& resistance() const { return R_; }
+  const lubrication::NearFieldStats& near_field_stats() const { return stats_; }
 
+  // Conveniences for the reference use (prepare + one problem, the flow given at construction).
+  MatX resistance(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain = Domain{},
+                  lubrication::NearFieldStats* stats = nullptr);
   HydroResult mobility_problem(const std::vector<Vec3>& x, const std::vector<double>& a, const std::vector<char>& fixed,
                                const std::vector<Vec3>& F, const std::vector<Vec3>& T, const Domain& domain = Domain{},
-                               lubrication::NearFieldStats* stats = nullptr) const;
-
-  // Given particle velocities (U, Omega relative to nothing: absolute) -> F, T, S.
+                               lubrication::NearFieldStats* stats = nullptr);
+  // Given particle velocities (absolute) -> F, T, S.
   HydroResult resistance_problem(const std::vector<Vec3>& x, const std::vector<double>& a, const std::vector<Vec3>& U,
-                                 const std::vector<Vec3>& Omega, const Domain& domain = Domain{}) const;
+                                 const std::vector<Vec3>& Omega, const Domain& domain = Domain{});
 
  private:
+  void select_reference_operator(const Domain& domain);
   Moments m_;
   double mu_;
-  AmbientFlow flow_;
+  AmbientFlow flow_;         // reference use only
+  bool reference_ = false;   // operator chosen per domain (reference constructor)
+  std::unique_ptr<MobilityOperator> op_;
   lubrication::NearField near_;
+  MatX R_;
+  lubrication::NearFieldStats stats_;
 };
 
 }  // namespace stokesian

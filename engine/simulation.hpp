@@ -1,32 +1,37 @@
 #pragma once
-// The run driver: scene -> state -> forces -> hydrodynamic solve -> integrator -> outputs.
+// The run driver: scene -> state -> forces -> hydrodynamic solve -> integrator -> observers ->
+// outputs. One step's phases form a task graph (engine/core/task_graph.hpp): pair forces, the
+// hydrodynamic set-up (far-field operator, near-field assembly) and the output diagnostics are
+// independent and run concurrently; the solve follows them.
+#include "engine/core/output.hpp"
+#include "engine/core/scene.hpp"
+#include "engine/core/state.hpp"
+#include "engine/core/task_graph.hpp"
+#include "engine/dynamics.hpp"
 #include "engine/hydrodynamics.hpp"
+#include "engine/integrators.hpp"
 #include "engine/model.hpp"
-#include "engine/pair_forces.hpp"
-#include "engine/scene.hpp"
-#include "engine/state.hpp"
-#include "io/h5md.hpp"
+#include "engine/observers.hpp"
 
-#include <random>
+#include <memory>
 #include <string>
+#include <vector>
 
 namespace stokesian {
 
-// Everything computed at one configuration.
-struct Evaluation {
-  std::vector<Vec3> force, torque;  // non-hydrodynamic force and torque on each particle
-  HydroResult hydro;                // velocities etc. (deterministic part)
-  forces::PairForceTotals pair;     // pair energy and virial
-};
-
-struct RunOptions {
-  std::string out;         // trajectory path
-  bool resume = false;
+struct RunControl {
   bool quiet = false;
-  long max_steps = -1;     // stop after this many steps of this invocation (tests); -1 = run to the end
+  long max_steps = -1;      // stop after this many steps of this call (tests); -1 = run to the end
+  bool frame_done = false;  // the frame of the state's step is already recorded (resumed runs)
 };
 
-class Simulation {
+// Wall time of the phases of the last evaluation (benchmarks).
+struct PhaseTimes {
+  std::vector<std::string> names;
+  std::vector<double> seconds;
+};
+
+class Simulation final : public Dynamics {
  public:
   explicit Simulation(Scene scene);  // resolves the model; ConfigError if it is not available
 
@@ -34,25 +39,38 @@ class Simulation {
   const ResolvedModel& model() const { return model_; }
 
   State initial_state() const;
-  Evaluation evaluate(const State& s, const std::vector<Vec3>& x) const;
-  io::Frame frame(const State& s, const Evaluation& ev) const;
-  io::TrajectoryHeader header() const;
+  // Evaluation at positions x, time t into the step of s; with `diagnostics`, also the gap
+  // statistics (computed beside the forces and the solve).
+  Evaluation evaluate(const State& s, const std::vector<Vec3>& x, double t = 0.0) override {
+    return evaluate(s, x, t, false);
+  }
+  Evaluation evaluate(const State& s, const std::vector<Vec3>& x, double t, bool diagnostics);
+  std::vector<Vec3> brownian_displacement(const State& s, double dt, Rng& rng) override;
+
+  Frame frame(const State& s, const Evaluation& ev) const;
+  RunHeader header() const;
 
   // Advance s by one (accepted) step; ev is the evaluation at s.position.
-  void advance(State& s, const Evaluation& ev, std::mt19937_64& rng) const;
+  void advance(State& s, const Evaluation& ev, Rng& rng);
 
-  // Full run with periodic checkpoints; returns the number of steps taken by this call.
-  long run(const RunOptions& opt) const;
-  // One solve of the initial configuration written as a single frame.
-  void solve(const std::string& out) const;
+  // Steps s to the scene's last step, recording every output step and checkpointing; returns the
+  // number of steps taken by this call.
+  long run(State& s, OutputSink& out, const RunControl& control);
+
+  // Phase graph mode (serial: the same phases one after another, for comparisons).
+  void set_task_mode(TaskGraph::Mode mode) { task_mode_ = mode; }
+  const PhaseTimes& phase_times() const { return phases_; }
 
  private:
-  void wrap(State& s) const;
   void check_finite(const State& s) const;
   Scene scene_;
   ResolvedModel model_;
-  AmbientFlow flow_;
+  double strain_rate_;  // d(Lees-Edwards strain)/dt of the box
   Hydrodynamics hydro_;
+  std::unique_ptr<Integrator> integrator_;
+  std::vector<std::unique_ptr<Observer>> observers_;
+  TaskGraph::Mode task_mode_ = TaskGraph::Mode::automatic;
+  PhaseTimes phases_;
 };
 
 }  // namespace stokesian

@@ -2,7 +2,7 @@
 // ewald_split.hpp.
 #include "ewald/ewald_reference.hpp"
 
-#include "engine/mobility_pair.hpp"
+#include "engine/kernels/mobility_pair.hpp"
 #include "ewald/ewald_split.hpp"
 #include "ewald/lattice.hpp"
 
@@ -13,7 +13,6 @@
 namespace stokesian::ewald {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 // M(i*d.., j*d..) += block of scalars s along e, built column by column with apply_pair.
 void add_block(MatX& M, long i, long j, const PairScalars& s, const Vec3& e, Moments m) {
@@ -90,6 +89,17 @@ MatX ewald_mobility(const std::vector<Vec3>& x, const std::vector<double>& a, do
   }
   M += (2.0 / lat.volume) * W;
   return M;
+}
+
+void EwaldFarField::set_configuration(const Configuration& c) {
+  if (built_ && x_ == c.x && a_ == c.a && domain_.kind == c.domain.kind && domain_.box == c.domain.box &&
+      domain_.shear_strain == c.domain.shear_strain)
+    return;
+  M_ = ewald_mobility(c.x, c.a, mu_, m_, c.domain, opt_);
+  x_ = c.x;
+  a_ = c.a;
+  domain_ = c.domain;
+  built_ = true;
 }
 
 }  // namespace stokesian::ewald

@@ -11,9 +11,8 @@
 // converged to rounding and independent of xi (tested to 1e-13).
 // Cost: O(N^2 (images + wave vectors)) with about 2 * (4 pi / 3) (tail / (xi V^(1/3)))^3 of each;
 // meant for N up to a few hundred.
-#include "engine/far_field.hpp"
-#include "engine/state.hpp"
-#include "engine/types.hpp"
+#include "engine/core/operators.hpp"
+#include "engine/core/types.hpp"
 
 #include <vector>
 
@@ -30,20 +29,34 @@ struct EwaldReferenceOptions {
 MatX ewald_mobility(const std::vector<Vec3>& x, const std::vector<double>& a, double mu, Moments m,
                     const Domain& domain, const EwaldReferenceOptions& opt = {});
 
-// Dense Ewald operator (the matrix is built once in the constructor).
-class EwaldFarField final : public FarFieldOperator {
+// Dense Ewald operator: the matrix is built per configuration and kept while the configuration
+// is unchanged (positions, radii, box and strain all equal), e.g. for repeated Brownian draws.
+class EwaldFarField final : public MobilityOperator {
  public:
+  explicit EwaldFarField(const MobilitySpec& spec, const EwaldReferenceOptions& opt = {})
+      : mu_(spec.viscosity), m_(spec.moments), opt_(opt) {}
   EwaldFarField(const std::vector<Vec3>& x, const std::vector<double>& a, double mu, Moments m, const Domain& domain,
                 const EwaldReferenceOptions& opt = {})
-      : m_(m), M_(ewald_mobility(x, a, mu, m, domain, opt)) {}
+      : mu_(mu), m_(m), opt_(opt) {
+    set_configuration({x, a, domain});
+  }
   Moments moments() const override { return m_; }
   Eigen::Index size() const override { return M_.rows(); }
+  void set_configuration(const Configuration& c) override;
+  bool set_configuration_uses_threads(long) const override { return true; }
   void apply(const VecX& in, VecX& out) const override { out.noalias() = M_ * in; }
   const char* name() const override { return "ewald"; }
+  const MatX* dense() const override { return &M_; }
   const MatX& matrix() const { return M_; }
 
  private:
+  double mu_;
   Moments m_;
+  EwaldReferenceOptions opt_;
+  std::vector<Vec3> x_;
+  std::vector<double> a_;
+  Domain domain_;
+  bool built_ = false;
   MatX M_;
 };
 

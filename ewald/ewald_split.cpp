@@ -1,7 +1,7 @@
 // Ewald splitting of Psi; the mathematics is stated in ewald_split.hpp (and docs/ewald.md s.2).
 #include "ewald/ewald_split.hpp"
 
-#include "engine/sym_traceless.hpp"
+#include "engine/core/sym_traceless.hpp"
 
 #include <array>
 #include <cmath>
@@ -9,7 +9,6 @@
 namespace stokesian::ewald {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kSqrtPi = 1.77245385090551602730;
 // Below xi r = kSeries the wave part is summed from its Taylor series (terms (xi r)^(2n) / n!,
 // n <= kTerms: truncation < 1e-19 at xi r = 0.5).
@@ -195,7 +194,7 @@ MatXc fourier_response(const Vec3& k, double a, Moments m) {
   R(5, 1) = h * k.x();
   if (d == 6) return R;
   for (int p = 0; p < 5; ++p) {
-    const Vec3 bk = from_vec5(Vec5::Unit(p)) * k;
+    const Vec3 bk = sym_traceless_basis()[std::size_t(p)] * k;
     for (int j = 0; j < 3; ++j) R(6 + p, j) = C(0.0, pt * bk[j]);
   }
   return R;

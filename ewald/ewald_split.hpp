@@ -27,8 +27,8 @@
 //            + d_ab (M_self_free - wave(r = 0)),
 // with G(k) = H(k) (I - kk/k^2) / (mu k^2) and R_a(k) the per-particle response operator
 // (fourier_response below).
-#include "engine/mobility_pair.hpp"
-#include "engine/types.hpp"
+#include "engine/kernels/mobility_pair.hpp"
+#include "engine/core/types.hpp"
 
 #include <complex>
 

@@ -1,7 +1,7 @@
 // Fourier-space PME kernel; mathematics in kernel.hpp.
 #include "ewald/kernel.hpp"
 
-#include "engine/sym_traceless.hpp"
+#include "engine/core/sym_traceless.hpp"
 #include "ewald/ewald_split.hpp"
 
 #include <cmath>
@@ -18,12 +18,10 @@ Vec3c cross(const Vec3& k, const Vec3c& v) {
 void apply_fourier_kernel(const GridGeometry& g, const Lattice& lattice, double xi, double mu, Moments m,
                           std::complex<double>* fields) {
   using C = std::complex<double>;
-  constexpr double kPi = 3.14159265358979323846;
   const int d = dof_per_particle(m);
   const int M0 = g.M[0], M1 = g.M[1], M2 = g.M[2], H2 = M2 / 2 + 1;
   const double wexp = 4.0 * kPi * kPi * g.s * g.s;  // W^2 = exp(-wexp sum (n_d / M_d)^2)
-  Mat3 basis[5];
-  for (int q = 0; q < 5; ++q) basis[q] = from_vec5(Vec5::Unit(q));
+  const auto& basis = sym_traceless_basis();
   const C I(0.0, 1.0);
 #pragma omp parallel for schedule(static)
   for (int i0 = 0; i0 < M0; ++i0) {

@@ -8,16 +8,13 @@ namespace stokesian::ewald {
 
 Lattice Lattice::from_domain(const Domain& d) {
   if (!d.periodic()) throw std::invalid_argument("ewald: the domain is not periodic");
-  const Vec3& L = d.box;
-  if (!(L.minCoeff() > 0.0)) throw std::invalid_argument("ewald: periodic box with non-positive edge");
+  if (!(d.box.minCoeff() > 0.0)) throw std::invalid_argument("ewald: periodic box with non-positive edge");
   Lattice l;
-  double g = d.shear_strain;
-  g -= std::round(g * L.y() / L.x()) * L.x() / L.y();
-  l.strain = g;
-  l.A << L.x(), g * L.y(), 0.0, 0.0, L.y(), 0.0, 0.0, 0.0, L.z();
+  l.strain = d.reduced_strain();
+  l.A = d.lattice();
   l.Ainv = l.A.inverse();
-  l.B = 2.0 * 3.14159265358979323846 * l.Ainv.transpose();
-  l.volume = L.x() * L.y() * L.z();
+  l.B = 2.0 * kPi * l.Ainv.transpose();
+  l.volume = d.box.x() * d.box.y() * d.box.z();
   return l;
 }
 

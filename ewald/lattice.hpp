@@ -1,14 +1,12 @@
 #pragma once
 // Periodic (optionally Lees-Edwards sheared) lattice of a Domain and its reciprocal lattice.
 //
-// Real lattice: a1 = (Lx, 0, 0), a2 = (gamma Ly, Ly, 0), a3 = (0, 0, Lz), gamma the Lees-Edwards
-// strain (Domain::shear_strain). Since a2 + n a1 spans the same lattice, gamma is reduced to
-// gamma' = gamma - round(gamma Ly / Lx) Lx / Ly (|gamma' Ly| <= Lx / 2): the lattice, hence every
-// lattice sum, is exactly periodic in gamma with period Lx / Ly.
+// Real lattice: the columns of Domain::lattice() (engine/core/domain.hpp), at the reduced strain
+// gamma', so that every lattice sum is exactly periodic in the strain with period Lx / Ly.
 // Reciprocal lattice: B = 2 pi A^{-T} (columns b_j, a_i . b_j = 2 pi d_ij), wave vectors k = B n.
 // Fractional coordinates s = A^{-1} x are periodic on the unit cube and k . x = 2 pi n . s.
-#include "engine/state.hpp"
-#include "engine/types.hpp"
+#include "engine/core/domain.hpp"
+#include "engine/core/types.hpp"
 
 namespace stokesian::ewald {
 

@@ -1,7 +1,7 @@
 // PME far field: set-up and the three parts of the product; mathematics in pme.hpp.
 #include "ewald/pme.hpp"
 
-#include "engine/mobility_pair.hpp"
+#include "engine/kernels/mobility_pair.hpp"
 #include "ewald/ewald_split.hpp"
 #include "ewald/interpolate.hpp"
 #include "ewald/kernel.hpp"
@@ -31,12 +31,33 @@ struct PmeFarField::Fft {
   }
 };
 
+PmeFarField::PmeFarField(const MobilitySpec& spec, const PmeOptions& opt)
+    : n_(0), mu_(spec.viscosity), m_(spec.moments), tolerance_(spec.tolerance), options_(opt) {}
+
 PmeFarField::PmeFarField(const std::vector<Vec3>& x, const std::vector<double>& a, double mu, Moments m,
                          const Domain& domain, double tolerance, const PmeOptions& opt)
-    : n_(long(x.size())), mu_(mu), m_(m), domain_(domain), lattice_(Lattice::from_domain(domain)) {
+    : n_(0), mu_(mu), m_(m), tolerance_(tolerance), options_(opt) {
+  build(x, a, domain);
+}
+
+void PmeFarField::set_configuration(const Configuration& c) {
+  // Same particles, radii, box and strain: keep parameters, grid and FFTW plans.
+  if (fft_ && radius_ == c.a && domain_.box == c.domain.box && domain_.shear_strain == c.domain.shear_strain &&
+      domain_.kind == c.domain.kind)
+    update_positions(c.x);
+  else
+    build(c.x, c.a, c.domain);
+}
+
+void PmeFarField::build(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain) {
   if (x.size() != a.size() || x.empty()) throw std::invalid_argument("PmeFarField: bad particle arrays");
+  n_ = long(x.size());
+  domain_ = domain;
+  lattice_ = Lattice::from_domain(domain);
+  const double mu = mu_;
+  const Moments m = m_;
   const auto [amin, amax] = std::minmax_element(a.begin(), a.end());
-  p_ = pme_parameters(tolerance, lattice_, int(n_), *amin, *amax, m, opt);
+  p_ = pme_parameters(tolerance_, lattice_, int(n_), *amin, *amax, m, options_);
   if (p_.support > 64) throw std::invalid_argument("PmeFarField: window support above 64 points");
 
   // Grid and windows in fractional coordinates.

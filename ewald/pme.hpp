@@ -11,16 +11,17 @@
 //              (ewald_split.hpp), pairs from trees::neighbor_pairs (minimum image, Lees-Edwards);
 //   self part: M_self_free - wave(r = 0) per particle.
 // Everything that depends only on the configuration (windows, slab colouring, pair scalars, FFTW
-// plans) is prepared in the constructor; apply() is then repeatable and its result is independent
+// plans) is prepared by set_configuration (or the configuration constructor): parameters, grid
+// and plans are kept while particles, radii, box and strain are unchanged, so under shear they are
+// remade once per strain. apply() is then repeatable and its result is independent
 // of the number of OpenMP threads. apply() uses work arrays owned by the object: one product at a
 // time per object (it parallelises internally). Construct objects from one thread at a time (FFTW
 // planning is not thread-safe). All parameters come from the tolerance (pme_parameters.hpp).
 // Lees-Edwards: the grid lives on fractional coordinates of the sheared lattice (lattice.hpp) and
 // the kernel uses the sheared reciprocal vectors; the strain is reduced first, so the operator is
 // exactly periodic in the strain.
-#include "engine/far_field.hpp"
-#include "engine/mobility_pair.hpp"
-#include "engine/state.hpp"
+#include "engine/core/operators.hpp"
+#include "engine/kernels/mobility_pair.hpp"
 #include "ewald/lattice.hpp"
 #include "ewald/pme_parameters.hpp"
 #include "ewald/spread.hpp"
@@ -30,8 +31,10 @@
 
 namespace stokesian::ewald {
 
-class PmeFarField final : public FarFieldOperator {
+class PmeFarField final : public MobilityOperator {
  public:
+  // Without a configuration: call set_configuration before apply.
+  explicit PmeFarField(const MobilitySpec& spec, const PmeOptions& opt = {});
   PmeFarField(const std::vector<Vec3>& x, const std::vector<double>& a, double mu, Moments m, const Domain& domain,
               double tolerance, const PmeOptions& opt = {});
   ~PmeFarField() override;
@@ -42,6 +45,8 @@ class PmeFarField final : public FarFieldOperator {
   Eigen::Index size() const override { return Eigen::Index(n_) * dof_per_particle(m_); }
   void apply(const VecX& in, VecX& out) const override;
   const char* name() const override { return "pme"; }
+  void set_configuration(const Configuration& c) override;
+  bool set_configuration_uses_threads(long) const override { return true; }
 
   // New positions, same particles, radii, box and strain: keeps the parameters, grid and FFTW plans
   // and rebuilds windows, slab colouring and real-space pairs (the result equals a new object's).
@@ -62,11 +67,14 @@ class PmeFarField final : public FarFieldOperator {
   };
   // Real-space scalars of entry t of particle i's neighbour list (cached or computed).
   mobility::PairScalars entry_scalars(long i, int t) const;
+  void build(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain);
   void set_positions(const std::vector<Vec3>& x);
   struct Fft;
   long n_;
   double mu_;
   Moments m_;
+  double tolerance_;
+  PmeOptions options_;
   Domain domain_;
   Lattice lattice_;
   PmeParameters p_;

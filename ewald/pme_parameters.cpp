@@ -10,7 +10,6 @@
 
 namespace stokesian::ewald {
 namespace {
-constexpr double kPi = 3.14159265358979323846;
 }
 
 int fft_size(int n) {

@@ -14,7 +14,7 @@ ParticleWindows make_windows(const GridGeometry& g, const std::vector<Vec3>& s_f
   win.w.resize(std::size_t(n) * 9 * P);
   win.cF.resize(n);
   win.cT.resize(n);
-  const double s2 = g.s * g.s, norm = 1.0 / (std::sqrt(2.0 * 3.14159265358979323846) * g.s);
+  const double s2 = g.s * g.s, norm = 1.0 / (std::sqrt(2.0 * kPi) * g.s);
   for (long p = 0; p < n; ++p) {
     win.cF[p] = a[p] * a[p] / 6.0;
     win.cT[p] = a[p] * a[p] / 10.0;

@@ -13,7 +13,7 @@
 // c = a^2/6 (force/velocity) or a^2/10 (torque, stresslet / rotation, strain), whose transform is
 // (1 - c k^2) W^ -- the truncated Faxen factor of ewald_split.hpp. In grid units
 //     lap = sum_ij Gt_ij d/d delta_i d/d delta_j,   Gt_ij = (A^{-1} A^{-T})_ij M_i M_j.
-#include "engine/types.hpp"
+#include "engine/core/types.hpp"
 
 #include <array>
 #include <vector>

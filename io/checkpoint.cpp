@@ -1,5 +1,7 @@
 #include "io/checkpoint.hpp"
 
+#include "io/scene_toml.hpp"
+
 #include <cerrno>
 #include <cstring>
 #include <fstream>
@@ -177,7 +179,7 @@ Checkpoint read_checkpoint(const std::string& path) {
   return c;
 }
 
-RunOutput RunOutput::start(const std::string& path, const TrajectoryHeader& header) {
+RunOutput RunOutput::start(const std::string& path, const RunHeader& header) {
   // Remove the old checkpoint first: a kill between the two steps leaves no checkpoint, never
   // a checkpoint that points into the new trajectory.
   detail::remove_if_exists(checkpoint_path(path));
@@ -185,7 +187,7 @@ RunOutput RunOutput::start(const std::string& path, const TrajectoryHeader& head
   return RunOutput(Trajectory::create(path, header));
 }
 
-RunOutput RunOutput::resume(const std::string& path, const TrajectoryHeader& header, Checkpoint& restored) {
+RunOutput RunOutput::resume(const std::string& path, const RunHeader& header, Checkpoint& restored) {
   const std::string cp = checkpoint_path(path);
   if (!detail::exists(cp)) throw IoError(cp + ": no checkpoint to resume from");
   Checkpoint c = read_checkpoint(cp);
@@ -193,8 +195,11 @@ RunOutput RunOutput::resume(const std::string& path, const TrajectoryHeader& hea
   if (c.state.size() != header.particles)
     refuse("the checkpoint holds " + std::to_string(c.state.size()) + " particles, the run has " +
            std::to_string(header.particles));
-  if (c.scene_toml != header.scene_toml) refuse("the scene differs from the one the checkpoint was written with");
-  if (c.model != header.model) refuse("the model differs (checkpoint: \"" + c.model + "\", run: \"" + header.model + "\")");
+  if (!same_scene(c.scene_toml, header.scene_toml)) refuse("the scene differs from the one the checkpoint was written with");
+  const ModelKey stored = ModelKey::from_stored(c.model), run = ModelKey::from_stored(header.model_key);
+  if (stored != run || (stored.empty() && c.model != header.model))
+    refuse("the model differs (checkpoint: \"" + (stored.empty() ? c.model : stored.text()) + "\", run: \"" +
+           (run.empty() ? header.model : run.text()) + "\")");
   RunOutput out(Trajectory::resume(path, header, c.state.step, c.trajectory_frames));
   restored = std::move(c);
   return out;
@@ -214,7 +219,7 @@ void RunOutput::checkpoint(const State& state, const std::map<std::string, doubl
   c.values = values;
   c.strings = strings;
   c.scene_toml = traj_.header().scene_toml;
-  c.model = traj_.header().model;
+  c.model = traj_.header().model_key.empty() ? traj_.header().model : traj_.header().model_key;
   c.trajectory_frames = traj_.committed_frames();
   write_checkpoint(checkpoint_file(), c);
 }

@@ -10,7 +10,8 @@
 //
 // Resume guarantee: after RunOutput::resume the trajectory holds exactly the frames with
 // step <= checkpoint step, and their number equals the count the checkpoint recorded.
-#include "engine/state.hpp"
+#include "engine/core/output.hpp"
+#include "engine/core/state.hpp"
 #include "io/h5md.hpp"
 
 #include <cstdint>
@@ -24,7 +25,7 @@ struct Checkpoint {
   std::map<std::string, double> values;         // opaque driver data (accumulators, counters)
   std::map<std::string, std::string> strings;   // opaque driver data (text)
   std::string scene_toml;                       // resolved scene the run was started with
-  std::string model;                            // resolved model description
+  std::string model;                            // model key (ModelKey::text); 0.1.0 wrote the description
   std::int64_t trajectory_frames = 0;           // frames committed to the trajectory when written
 };
 
@@ -34,17 +35,19 @@ Checkpoint read_checkpoint(const std::string& path);                  // IoError
 inline std::string checkpoint_path(const std::string& trajectory_path) { return trajectory_path + ".ckpt"; }
 
 // The trajectory + checkpoint pair of one run.
-class RunOutput {
+class RunOutput final : public OutputSink {
  public:
   // Fresh run: removes a stale checkpoint, then creates the trajectory with zero frames.
-  static RunOutput start(const std::string& path, const TrajectoryHeader& header);
+  static RunOutput start(const std::string& path, const RunHeader& header);
   // Continue from path.ckpt: returns the restored checkpoint through `restored`. Refuses
-  // (IoError) when checkpoint, trajectory and header disagree (N, scene, model, frame count).
-  static RunOutput resume(const std::string& path, const TrajectoryHeader& header, Checkpoint& restored);
+  // (IoError) when checkpoint, trajectory and header disagree (N, scene, model key, frame count).
+  static RunOutput resume(const std::string& path, const RunHeader& header, Checkpoint& restored);
 
-  void record(Frame frame) { traj_.append(std::move(frame)); }
+  void record(const Frame& frame) override { traj_.append(frame); }
+  void record(Frame&& frame) { traj_.append(std::move(frame)); }
   // Commit buffered frames, then write the checkpoint of `state` (in that order).
-  void checkpoint(const State& state, const std::map<std::string, double>& values = {},
+  void checkpoint(const State& state) override { checkpoint(state, {}, {}); }
+  void checkpoint(const State& state, const std::map<std::string, double>& values,
                   const std::map<std::string, std::string>& strings = {});
 
   Trajectory& trajectory() { return traj_; }

@@ -1,5 +1,7 @@
 #include "io/h5md.hpp"
 
+#include "io/scene_toml.hpp"
+
 #include "stokesian/build_info.hpp"
 
 #include <hdf5.h>
@@ -389,58 +391,17 @@ void append_rows(hid_t loc, const std::string& name, hid_t memtype, const void* 
   checked(H5Dwrite(d, memtype, mspace, fspace, H5P_DEFAULT, data), file, "cannot write " + name);
 }
 
-// Per-particle quantities in file order.
-struct QuantityDesc {
-  const char* name;
-  int comps;  // 0 = scalar per particle (item shape [N])
-};
-constexpr QuantityDesc kQuantities[] = {{"position", 3}, {"velocity", 3}, {"angular_velocity", 3}, {"force", 3},
-                                        {"torque", 3},   {"stresslet", 6}, {"radius", 0}};
-constexpr int kNumQuantities = 7;
-
-bool recorded(const Quantities& q, int i) {
-  switch (i) {
-    case 1: return q.velocity;
-    case 2: return q.angular_velocity;
-    case 3: return q.force;
-    case 4: return q.torque;
-    case 5: return q.stresslet;
-    default: return true;  // position, radius
-  }
-}
-
-const std::vector<Vec3>* vec3_of(const Frame& f, int i) {
-  switch (i) {
-    case 0: return &f.position;
-    case 1: return &f.velocity;
-    case 2: return &f.angular_velocity;
-    case 3: return &f.force;
-    case 4: return &f.torque;
-    default: return nullptr;
-  }
-}
-
-std::size_t entries_of(const Frame& f, int i) {
-  if (i == 5) return f.stresslet.size();
-  if (i == 6) return f.radius.size();
-  return vec3_of(f, i)->size();
-}
-
-void pack(const Frame& f, int i, double* out) {
-  if (i == 5) {
-    for (const auto& s : f.stresslet)
-      for (int c = 0; c < 6; ++c) *out++ = s[c];
-  } else if (i == 6) {
-    std::copy(f.radius.begin(), f.radius.end(), out);
-  } else {
-    for (const auto& v : *vec3_of(f, i))
-      for (int c = 0; c < 3; ++c) *out++ = v[c];
-  }
+std::vector<hsize_t> item_dims(const std::vector<int>& shape) {
+  std::vector<hsize_t> d;
+  for (int k : shape) d.push_back(static_cast<hsize_t>(k));
+  return d;
 }
 
 std::string boundary_name(const Domain& d) { return d.periodic() ? "periodic" : "none"; }
 
-void write_layout(const std::string& path, const TrajectoryHeader& h) {
+void write_layout(const std::string& path, const RunHeader& h) {
+  if (h.particle_fields.empty() || h.particle_fields.front().name != "position")
+    throw IoError(path + ": a trajectory's first per-particle field must be position");
   quiet_hdf5();
   H fapl = checked(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, path, "property list");
   H5Pset_fclose_degree(fapl, H5F_CLOSE_STRONG);
@@ -455,22 +416,22 @@ void write_layout(const std::string& path, const TrajectoryHeader& h) {
     write_attr_strings(creator, "version", {build::version}, true, path);
   }
   {
-    const std::string N = std::to_string(h.particles);
     H all = make_group(f, "particles/all", path);
     const hsize_t n = h.particles;
-    for (int i = 0; i < kNumQuantities; ++i) {
-      if (!recorded(h.record, i)) continue;
+    for (const FieldSpec& spec : h.particle_fields) {
       std::vector<hsize_t> item{n};
-      if (kQuantities[i].comps > 0) item.push_back(static_cast<hsize_t>(kQuantities[i].comps));
-      if (i == 0) {
+      for (hsize_t d : item_dims(spec.shape)) item.push_back(d);
+      if (spec.name == "position") {
         make_element(all, "position", item, -1, path);
       } else {
         H clock = open_group(all, "position", path);
-        make_element(all, kQuantities[i].name, item, clock, path);
+        make_element(all, spec.name, item, clock, path);
+      }
+      if (!spec.components.empty()) {
+        H g = open_group(all, spec.name, path);
+        write_attr_strings(g, "components", spec.components, false, path);
       }
     }
-    H st = has_link(all, "stresslet") ? open_group(all, "stresslet", path) : H();
-    if (st >= 0) write_attr_strings(st, "components", {"xx", "xy", "xz", "yy", "yz", "zz"}, false, path);
 
     H box = make_group(all, "box", path);
     write_attr_ints(box, "dimension", {3}, true, path);
@@ -495,6 +456,7 @@ void write_layout(const std::string& path, const TrajectoryHeader& h) {
     H p = make_group(f, "parameters/stokesian", path);
     write_string_dataset(p, "scene", h.scene_toml, path);
     write_string_dataset(p, "model", h.model, path);
+    write_string_dataset(p, "model_key", h.model_key, path);
     write_string_dataset(p, "version", build::version, path);
     write_string_dataset(p, "git", build::git, path);
     write_string_dataset(p, "compiler", build::compiler, path);
@@ -510,16 +472,15 @@ std::int64_t frames_in(hid_t file, const std::string& path) {
 }
 
 // Append frames to an open trajectory file; the caller guarantees their order and shapes.
-void append_frames(hid_t file, const std::string& path, const TrajectoryHeader& h, const std::vector<const Frame*>& fr) {
+void append_frames(hid_t file, const std::string& path, const RunHeader& h, const std::vector<const Frame*>& fr) {
   if (fr.empty()) return;
   const hsize_t k = fr.size(), n = h.particles;
   H all = open_group(file, "particles/all", path);
   const hsize_t f0 = static_cast<hsize_t>(frames_in(file, path));
-  for (int i = 0; i < kNumQuantities; ++i) {
-    if (!recorded(h.record, i)) continue;
-    H d = open_dataset(all, std::string(kQuantities[i].name) + "/value", path);
+  for (const FieldSpec& spec : h.particle_fields) {
+    H d = open_dataset(all, spec.name + "/value", path);
     if (dims_of(d, path)[0] != f0)
-      throw IoError(path + ": particles/all/" + kQuantities[i].name + " has a different frame count than position");
+      throw IoError(path + ": particles/all/" + spec.name + " has a different frame count than position");
   }
   std::vector<std::int64_t> steps(k);
   std::vector<double> times(k);
@@ -530,12 +491,14 @@ void append_frames(hid_t file, const std::string& path, const TrajectoryHeader& 
   append_rows(all, "position/step", H5T_NATIVE_INT64, steps.data(), k, path);
   append_rows(all, "position/time", H5T_NATIVE_DOUBLE, times.data(), k, path);
   std::vector<double> buf;
-  for (int i = 0; i < kNumQuantities; ++i) {
-    if (!recorded(h.record, i)) continue;
-    const hsize_t per = n * static_cast<hsize_t>(std::max(kQuantities[i].comps, 1));
+  for (const FieldSpec& spec : h.particle_fields) {
+    const hsize_t per = n * static_cast<hsize_t>(spec.item_size());
     buf.assign(k * per, 0.0);
-    for (hsize_t j = 0; j < k; ++j) pack(*fr[j], i, buf.data() + j * per);
-    append_rows(all, std::string(kQuantities[i].name) + "/value", H5T_NATIVE_DOUBLE, buf.data(), k, path);
+    for (hsize_t j = 0; j < k; ++j) {
+      const auto& v = fr[j]->particles.at(spec.name).values;
+      std::copy(v.begin(), v.end(), buf.begin() + static_cast<std::ptrdiff_t>(j * per));
+    }
+    append_rows(all, spec.name + "/value", H5T_NATIVE_DOUBLE, buf.data(), k, path);
   }
   if (h.domain.periodic() && h.sheared_box) {
     buf.assign(k * 9, 0.0);
@@ -551,15 +514,12 @@ void append_frames(hid_t file, const std::string& path, const TrajectoryHeader& 
   }
 
   // Observables: each has its own clock, since not every frame needs to carry every observable.
-  std::map<std::string, int> names;  // name -> width (0 = scalar)
-  for (const Frame* f : fr) {
-    for (const auto& s : f->scalars) names.emplace(s.first, 0);
-    for (const auto& v : f->vectors) names.emplace(v.first, static_cast<int>(v.second.size()));
-  }
+  std::map<std::string, std::vector<int>> names;  // name -> item shape
+  for (const Frame* f : fr)
+    for (const auto& [name, field] : f->observables) names.emplace(name, field.shape);
   H obs = open_group(file, "observables", path);
-  for (const auto& [name, width] : names) {
-    std::vector<hsize_t> item;
-    if (width > 0) item.push_back(static_cast<hsize_t>(width));
+  for (const auto& [name, shape] : names) {
+    const std::vector<hsize_t> item = item_dims(shape);
     if (!has_link(obs, name)) {
       make_element(obs, name, item, -1, path);
     } else {
@@ -571,15 +531,10 @@ void append_frames(hid_t file, const std::string& path, const TrajectoryHeader& 
     std::vector<std::int64_t> st;
     std::vector<double> tm, val;
     for (const Frame* f : fr) {
-      if (width == 0) {
-        auto it = f->scalars.find(name);
-        if (it == f->scalars.end()) continue;
-        val.push_back(it->second);
-      } else {
-        auto it = f->vectors.find(name);
-        if (it == f->vectors.end()) continue;
-        val.insert(val.end(), it->second.begin(), it->second.end());
-      }
+      auto it = f->observables.find(name);
+      if (it == f->observables.end()) continue;
+      if (it->second.shape != shape) throw IoError(path + ": observable " + name + " changes shape");
+      val.insert(val.end(), it->second.values.begin(), it->second.values.end());
       st.push_back(f->step);
       tm.push_back(f->time);
     }
@@ -658,30 +613,24 @@ TrajectoryInfo inspect_open(hid_t f, const std::string& path) {
     if (d.size() != 3 || d[2] != 3) throw IoError(path + ": particles/all/position/value is not frames x N x 3");
     info.particles = d[1];
   }
-  for (int i = 0; i < kNumQuantities; ++i) {
-    const std::string name = kQuantities[i].name;
-    const bool present = has_link(all, name);
-    switch (i) {
-      case 1: info.record.velocity = present; break;
-      case 2: info.record.angular_velocity = present; break;
-      case 3: info.record.force = present; break;
-      case 4: info.record.torque = present; break;
-      case 5: info.record.stresslet = present; break;
-      default:
-        if (!present) throw IoError(path + ": missing group particles/all/" + name);
+  {
+    std::vector<std::string> groups;
+    collect_elements(all, "", groups, path);  // every element below particles/all, box/edges included
+    info.frames = check_element(all, "position", path);
+    for (const auto& name : groups) {
+      if (name.rfind("box/", 0) == 0) continue;
+      const std::int64_t frames = name == "position" ? info.frames : check_element(all, name, path);
+      if (frames != info.frames)
+        throw IoError(path + ": particles/all/" + name + " holds " + std::to_string(frames) + " frames, position " +
+                      std::to_string(info.frames));
+      H v = open_dataset(all, name + "/value", path);
+      const auto d = dims_of(v, path);
+      if (d.size() < 2 || d[1] != info.particles) throw IoError(path + ": particles/all/" + name + "/value has the wrong shape");
+      FieldSpec spec{name, {}, {}};
+      for (std::size_t k = 2; k < d.size(); ++k) spec.shape.push_back(static_cast<int>(d[k]));
+      info.particle_fields.push_back(spec);
     }
-    if (!present) continue;
-    const std::int64_t frames = check_element(all, name, path);
-    if (i == 0) info.frames = frames;
-    else if (frames != info.frames)
-      throw IoError(path + ": particles/all/" + name + " holds " + std::to_string(frames) + " frames, position " +
-                    std::to_string(info.frames));
-    H v = open_dataset(all, name + "/value", path);
-    const auto d = dims_of(v, path);
-    const bool ok = kQuantities[i].comps == 0 ? d.size() == 2 && d[1] == info.particles
-                                               : d.size() == 3 && d[1] == info.particles &&
-                                                     d[2] == static_cast<hsize_t>(kQuantities[i].comps);
-    if (!ok) throw IoError(path + ": particles/all/" + name + "/value has the wrong shape");
+    if (!info.records("radius")) throw IoError(path + ": missing group particles/all/radius");
   }
   {
     H box = open_group(all, "box", path);
@@ -716,11 +665,22 @@ TrajectoryInfo inspect_open(hid_t f, const std::string& path) {
   H p = open_group(f, "parameters/stokesian", path);
   info.scene_toml = read_string_dataset(p, "scene", path);
   info.model = read_string_dataset(p, "model", path);
+  // Files of 0.1.0 have no model_key: read the key from their model description.
+  info.model_key = has_link(p, "model_key") ? read_string_dataset(p, "model_key", path)
+                                            : ModelKey::from_legacy_description(info.model).text();
   info.version = read_string_dataset(p, "version", path);
   return info;
 }
 
-void require_matches(const TrajectoryInfo& info, const TrajectoryHeader& h, const std::string& path) {
+// Names and shapes of per-particle fields, in name order.
+std::vector<std::pair<std::string, std::vector<int>>> field_set(const std::vector<FieldSpec>& fields) {
+  std::vector<std::pair<std::string, std::vector<int>>> out;
+  for (const auto& f : fields) out.emplace_back(f.name, f.shape);
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+void require_matches(const TrajectoryInfo& info, const RunHeader& h, const std::string& path) {
   auto refuse = [&](const std::string& why) {
     throw IoError(path + ": cannot continue this trajectory: " + why);
   };
@@ -728,13 +688,12 @@ void require_matches(const TrajectoryInfo& info, const TrajectoryHeader& h, cons
     refuse("it holds " + std::to_string(info.particles) + " particles, the run has " + std::to_string(h.particles));
   if (info.periodic != h.domain.periodic()) refuse("box boundary differs");
   if (info.sheared_box != (h.domain.periodic() && h.sheared_box)) refuse("sheared box differs");
-  const Quantities& a = info.record;
-  const Quantities& b = h.record;
-  if (a.velocity != b.velocity || a.angular_velocity != b.angular_velocity || a.force != b.force ||
-      a.torque != b.torque || a.stresslet != b.stresslet)
-    refuse("recorded per-particle quantities differ");
-  if (info.scene_toml != h.scene_toml) refuse("the scene differs from the one stored in parameters/stokesian/scene");
-  if (info.model != h.model) refuse("the model differs (file: \"" + info.model + "\", run: \"" + h.model + "\")");
+  if (field_set(info.particle_fields) != field_set(h.particle_fields)) refuse("recorded per-particle quantities differ");
+  if (!same_scene(info.scene_toml, h.scene_toml)) refuse("the scene differs from the one stored in parameters/stokesian/scene");
+  const ModelKey file_key = ModelKey::from_stored(info.model_key), run_key = ModelKey::from_stored(h.model_key);
+  if (file_key != run_key || (file_key.empty() && info.model != h.model))
+    refuse("the model differs (file: \"" + (file_key.empty() ? info.model : file_key.text()) + "\", run: \"" +
+           (run_key.empty() ? h.model : run_key.text()) + "\")");
 }
 
 }  // namespace
@@ -746,7 +705,7 @@ TrajectoryInfo inspect_trajectory(const std::string& path) {
   return inspect_open(f, path);
 }
 
-Trajectory Trajectory::create(const std::string& path, const TrajectoryHeader& header) {
+Trajectory Trajectory::create(const std::string& path, const RunHeader& header) {
   Trajectory t(path, header);
   for (const auto& stale : {t.shadow_path(), t.shadow_path() + ".tmp", path + ".old", path + ".tmp"})
     detail::remove_if_exists(stale);
@@ -757,7 +716,7 @@ Trajectory Trajectory::create(const std::string& path, const TrajectoryHeader& h
   return t;
 }
 
-Trajectory Trajectory::resume(const std::string& path, const TrajectoryHeader& header, std::int64_t last_step,
+Trajectory Trajectory::resume(const std::string& path, const RunHeader& header, std::int64_t last_step,
                               std::int64_t expected_frames) {
   Trajectory t(path, header);
   const std::string S = t.shadow_path(), tmp = path + ".tmp";
@@ -811,16 +770,22 @@ Trajectory Trajectory::resume(const std::string& path, const TrajectoryHeader& h
 }
 
 void Trajectory::check_frame(const Frame& f) const {
-  for (int i = 0; i < kNumQuantities; ++i) {
-    if (recorded(header_.record, i) && entries_of(f, i) != header_.particles)
-      throw IoError(path_ + ": frame at step " + std::to_string(f.step) + " has " + std::to_string(entries_of(f, i)) +
-                    " " + kQuantities[i].name + " entries for " + std::to_string(header_.particles) + " particles");
+  for (const FieldSpec& spec : header_.particle_fields) {
+    auto it = f.particles.find(spec.name);
+    const std::size_t per = static_cast<std::size_t>(spec.item_size());
+    const std::size_t entries = it == f.particles.end() ? 0 : it->second.values.size() / per;
+    if (it == f.particles.end() || it->second.values.size() != header_.particles * per || it->second.shape != spec.shape)
+      throw IoError(path_ + ": frame at step " + std::to_string(f.step) + " has " + std::to_string(entries) + " " +
+                    spec.name + " entries for " + std::to_string(header_.particles) + " particles");
   }
   if (any_step_ && f.step <= last_step_)
     throw IoError(path_ + ": frame step " + std::to_string(f.step) + " does not follow step " + std::to_string(last_step_));
-  for (const auto& v : f.vectors)
-    if (v.second.empty() || f.scalars.count(v.first))
-      throw IoError(path_ + ": observable " + v.first + " is empty or given both as scalar and vector");
+  for (const auto& [name, field] : f.observables) {
+    const FieldSpec spec{name, field.shape, {}};
+    if (field.values.empty() || field.values.size() != static_cast<std::size_t>(spec.item_size()))
+      throw IoError(path_ + ": observable " + name + " has " + std::to_string(field.values.size()) +
+                    " values for its shape");
+  }
 }
 
 void Trajectory::append(Frame frame) {
@@ -828,8 +793,7 @@ void Trajectory::append(Frame frame) {
   last_step_ = frame.step;
   any_step_ = true;
   std::size_t bytes = 0;
-  for (int i = 0; i < kNumQuantities; ++i)
-    if (recorded(header_.record, i)) bytes += entries_of(frame, i) * 8 * static_cast<std::size_t>(std::max(kQuantities[i].comps, 1));
+  for (const FieldSpec& spec : header_.particle_fields) bytes += frame.particles.at(spec.name).values.size() * 8;
   pending_bytes_ += bytes;
   pending_.push_back(std::move(frame));
   if (pending_bytes_ > max_pending_bytes) commit();

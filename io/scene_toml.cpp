@@ -1,9 +1,9 @@
 #include "io/scene_toml.hpp"
 
-#include "engine/errors.hpp"
-#include "engine/placement.hpp"
-#include "io/xyz.hpp"
+#include "engine/core/errors.hpp"
 #include "io/h5md.hpp"
+#include "io/xyz.hpp"
+#include "trees/placement.hpp"
 
 #include <toml++/toml.h>
 
@@ -20,7 +20,15 @@ namespace {
 
 class Reader {
  public:
-  explicit Reader(std::string source) : source_(std::move(source)) {}
+  explicit Reader(std::string source, std::map<std::string, int>* lines = nullptr)
+      : source_(std::move(source)), lines_(lines) {}
+
+  // The node of `key` in `t` (nullptr if absent); remembers its line as "table.key".
+  const toml::node* get(const toml::table& t, const std::string& table, const std::string& key) const {
+    const toml::node* n = t.get(key);
+    if (n && lines_) (*lines_)[table + "." + key] = int(n->source().begin.line);
+    return n;
+  }
 
   [[noreturn]] void fail(const toml::node* node, const std::string& where, const std::string& msg) const {
     std::ostringstream o;
@@ -43,7 +51,7 @@ class Reader {
 
   double number(const toml::table& t, const std::string& table, const std::string& key, double def, double lo,
                 double hi, bool lo_open = false) const {
-    const toml::node* n = t.get(key);
+    const toml::node* n = get(t, table, key);
     if (!n) return def;
     double v;
     if (auto i = n->value_exact<int64_t>()) v = double(*i);
@@ -58,7 +66,7 @@ class Reader {
   }
 
   long integer(const toml::table& t, const std::string& table, const std::string& key, long def, long lo, long hi) const {
-    const toml::node* n = t.get(key);
+    const toml::node* n = get(t, table, key);
     if (!n) return def;
     auto i = n->value_exact<int64_t>();
     if (!i) fail(n, where(table, key), "expected an integer, got " + type_name(*n));
@@ -72,7 +80,7 @@ class Reader {
 
   std::string choice(const toml::table& t, const std::string& table, const std::string& key, const std::string& def,
                      const std::vector<std::string>& allowed) const {
-    const toml::node* n = t.get(key);
+    const toml::node* n = get(t, table, key);
     if (!n) return def;
     auto s = n->value_exact<std::string>();
     if (!s) fail(n, where(table, key), "expected a string, got " + type_name(*n));
@@ -85,15 +93,20 @@ class Reader {
   }
 
   std::string string(const toml::table& t, const std::string& table, const std::string& key, const std::string& def) const {
-    const toml::node* n = t.get(key);
+    const toml::node* n = get(t, table, key);
     if (!n) return def;
     auto s = n->value_exact<std::string>();
     if (!s) fail(n, where(table, key), "expected a string, got " + type_name(*n));
     return *s;
   }
 
+  template <class E>
+  E name(const toml::table& t, const std::string& table, const std::string& key, E def) const {
+    return *parse_name<E>(choice(t, table, key, name_of(def), name_list<E>()));
+  }
+
   bool boolean(const toml::table& t, const std::string& table, const std::string& key, bool def) const {
-    const toml::node* n = t.get(key);
+    const toml::node* n = get(t, table, key);
     if (!n) return def;
     auto b = n->value_exact<bool>();
     if (!b) fail(n, where(table, key), "expected true or false, got " + type_name(*n));
@@ -116,7 +129,7 @@ class Reader {
 
   // One vector for all particles ([x, y, z]) or one per particle ([[x, y, z], ...]).
   std::vector<Vec3> vec3_list(const toml::table& t, const std::string& table, const std::string& key) const {
-    const toml::node* n = t.get(key);
+    const toml::node* n = get(t, table, key);
     if (!n) return {};
     const toml::array* a = n->as_array();
     if (!a || a->empty()) fail(n, where(table, key), "expected [x, y, z] or a list of [x, y, z]");
@@ -142,6 +155,7 @@ class Reader {
 
  private:
   std::string source_;
+  std::map<std::string, int>* lines_;
 };
 
 const toml::table& sub(const Reader& r, const toml::table& root, const std::string& name) {
@@ -226,7 +240,7 @@ void read_particles(const Reader& R, const toml::table& t, Scene& s, const std::
           mean_a3 = a3 * (1.0 - p.large_fraction + p.large_fraction * std::pow(p.radius_ratio, 3));
         else if (p.sizes == PlacementParams::Sizes::lognormal)
           mean_a3 = a3 * std::exp(4.5 * p.sigma * p.sigma);
-        p.count = std::max(1L, std::lround(p.volume_fraction * s.domain.box.prod() / (4.0 / 3.0 * M_PI * mean_a3)));
+        p.count = std::max(1L, std::lround(p.volume_fraction * s.domain.box.prod() / (4.0 / 3.0 * kPi * mean_a3)));
       }
     } else {
       if (!t.contains("count")) R.fail(&t, "[particles] count", "required with generate in an open domain");
@@ -256,8 +270,9 @@ void read_particles(const Reader& R, const toml::table& t, Scene& s, const std::
 PairForceParams read_pair(const Reader& R, const toml::table& t, std::size_t index) {
   const std::string T = "forces.pair." + std::to_string(index);
   PairForceParams p;
-  const std::string kind = R.choice(t, T, "kind", "", {"morse", "dlvo", "hertz"});
-  if (kind.empty()) R.fail(&t, "[[forces.pair]] kind", "required (\"morse\", \"dlvo\" or \"hertz\")");
+  const std::string kind = R.choice(t, T, "kind", "", name_list<PairForceParams::Kind>());
+  if (kind.empty())
+    R.fail(&t, "[[forces.pair]] kind", "required (" + quoted_list(name_list<PairForceParams::Kind>()) + ")");
   p.cutoff = R.number(t, T, "cutoff", 0.0, 0.0, 1e6);
   if (kind == "morse") {
     p.kind = PairForceParams::Kind::morse;
@@ -274,8 +289,7 @@ PairForceParams read_pair(const Reader& R, const toml::table& t, std::size_t ind
     p.surface_potential_reduced = R.number(t, T, "surface_potential_reduced", p.surface_potential_reduced, 0.0, 1e3);
     p.born_sigma = R.number(t, T, "born_sigma", p.born_sigma, 0.0, 1.0);
     p.min_gap = R.number(t, T, "min_gap", p.min_gap, 0.0, 1.0, true);
-    p.double_layer = R.choice(t, T, "double_layer", "hhf", {"hhf", "lsa"}) == "lsa"
-                         ? PairForceParams::DoubleLayer::lsa : PairForceParams::DoubleLayer::hhf;
+    p.double_layer = R.name(t, T, "double_layer", PairForceParams::DoubleLayer::hhf);
   } else {
     p.kind = PairForceParams::Kind::hertz;
     R.only(t, T, {"kind", "cutoff", "stiffness"});
@@ -291,8 +305,7 @@ std::string dir_of(const std::string& path) {
 
 }  // namespace
 
-Scene parse_scene(const std::string& text, const std::string& source) { 
-  Reader R(source);
+Scene parse_scene(const std::string& text, const std::string& source) {
   toml::table root;
   try {
     root = toml::parse(text, source);
@@ -301,14 +314,18 @@ Scene parse_scene(const std::string& text, const std::string& source) {
     o << source << ":" << e.source().begin.line << ": TOML syntax error: " << e.description();
     throw ConfigError(o.str());
   }
-  R.only(root, "top level", {"domain", "fluid", "particles", "forces", "flow", "hydrodynamics", "brownian", "time", "output"});
+  return parse_scene(root, source);
+}
+
+Scene parse_scene(const toml::table& root, const std::string& source) {
   Scene s;
   s.source = source;
+  Reader R(source, &s.lines);
+  R.only(root, "top level", {"domain", "fluid", "particles", "forces", "flow", "hydrodynamics", "brownian", "time", "output"});
 
   const toml::table& dom = sub(R, root, "domain");
   R.only(dom, "domain", {"kind", "box", "shear_strain"});
-  s.domain.kind = R.choice(dom, "domain", "kind", "open", {"open", "periodic"}) == "periodic" ? Domain::Kind::periodic
-                                                                                            : Domain::Kind::open;
+  s.domain.kind = R.name(dom, "domain", "kind", Domain::Kind::open);
   if (const toml::node* b = dom.get("box")) {
     s.domain.box = R.vec3(*b, "[domain] box");
     if (s.domain.box.minCoeff() <= 0) R.fail(b, "[domain] box", "every edge must be > 0");
@@ -352,24 +369,17 @@ Scene parse_scene(const std::string& text, const std::string& source) {
 
   const toml::table& flow = sub(R, root, "flow");
   R.only(flow, "flow", {"kind", "rate"});
-  const std::string fk = R.choice(flow, "flow", "kind", "none", {"none", "simple_shear", "planar_extension"});
-  s.flow.kind = fk == "simple_shear" ? FlowParams::Kind::simple_shear
-              : fk == "planar_extension" ? FlowParams::Kind::planar_extension : FlowParams::Kind::none;
+  s.flow.kind = R.name(flow, "flow", "kind", FlowParams::Kind::none);
   s.flow.rate = R.number(flow, "flow", "rate", 0.0, -1e12, 1e12);
   if (s.flow.kind != FlowParams::Kind::none && !flow.contains("rate"))
     R.fail(&flow, "[flow] rate", "required when kind is not \"none\"");
 
   const toml::table& hy = sub(R, root, "hydrodynamics");
   R.only(hy, "hydrodynamics", {"model", "moments", "far_field", "tolerance", "lubrication_cutoff", "lubrication_min_gap"});
-  const std::string model = R.choice(hy, "hydrodynamics", "model", "auto", {"auto", "free_draining", "far_field", "stokesian"});
-  s.hydro.model = model == "free_draining" ? HydroModel::free_draining
-                : model == "far_field" ? HydroModel::far_field
-                : model == "stokesian" ? HydroModel::stokesian : HydroModel::auto_;
-  const std::string mo = R.choice(hy, "hydrodynamics", "moments", "auto", {"auto", "F", "FT", "FTS"});
-  s.hydro.moments = mo == "F" ? MomentChoice::F : mo == "FT" ? MomentChoice::FT : mo == "FTS" ? MomentChoice::FTS : MomentChoice::auto_;
-  const std::string ff = R.choice(hy, "hydrodynamics", "far_field", "auto", {"auto", "direct", "ewald", "pme", "tree"});
-  s.hydro.far_field = ff == "direct" ? FarFieldMethod::direct : ff == "ewald" ? FarFieldMethod::ewald
-                    : ff == "pme" ? FarFieldMethod::pme : ff == "tree" ? FarFieldMethod::tree : FarFieldMethod::auto_;
+  s.hydro.model = R.name(hy, "hydrodynamics", "model", HydroModel::auto_);
+  s.hydro.moments = R.name(hy, "hydrodynamics", "moments", MomentChoice::auto_);
+  // A registered method or "auto": checked against the registry by model resolution.
+  s.hydro.far_field = R.string(hy, "hydrodynamics", "far_field", s.hydro.far_field);
   s.hydro.tolerance = R.number(hy, "hydrodynamics", "tolerance", 1e-6, 1e-14, 0.1);
   s.hydro.lubrication_cutoff = R.number(hy, "hydrodynamics", "lubrication_cutoff", 4.0, 2.0, 100.0, true);
   s.hydro.lubrication_min_gap = R.number(hy, "hydrodynamics", "lubrication_min_gap", 1e-6, 1e-8, 0.1);
@@ -382,8 +392,7 @@ Scene parse_scene(const std::string& text, const std::string& source) {
   R.only(ti, "time", {"dt", "steps", "integrator", "rkf_tolerance"});
   s.time.dt = R.number(ti, "time", "dt", 1e-3, 0.0, 1e12, true);
   s.time.steps = R.integer(ti, "time", "steps", 0, 0, std::numeric_limits<long>::max());
-  const std::string integ = R.choice(ti, "time", "integrator", "euler", {"euler", "midpoint", "rkf45"});
-  s.time.integrator = integ == "midpoint" ? Integrator::midpoint : integ == "rkf45" ? Integrator::rkf45 : Integrator::euler;
+  s.time.integrator = R.string(ti, "time", "integrator", s.time.integrator);  // checked by model resolution
   s.time.rkf_tolerance = R.number(ti, "time", "rkf_tolerance", 1e-6, 1e-14, 1.0);
 
   const toml::table& out = sub(R, root, "output");
@@ -394,20 +403,17 @@ Scene parse_scene(const std::string& text, const std::string& source) {
     R.fail(out.get("checkpoint_every"), "[output] checkpoint_every",
            "must be a multiple of [output] every (" + std::to_string(s.output.every) + ")");
   s.output.xyz = R.string(out, "output", "xyz", "");
-  if (const toml::node* rn = out.get("record")) {
+  if (const toml::node* rn = R.get(out, "output", "record")) {
     const toml::array* a = rn->as_array();
     if (!a) R.fail(rn, "[output] record", "expected a list of names");
-    s.output.velocity = s.output.angular_velocity = s.output.force = s.output.torque = s.output.stresslet = false;
+    // Names are checked against the registered outputs when the run is set up.
+    std::set<std::string> names;
     for (const auto& e : *a) {
       auto v = e.value_exact<std::string>();
-      const std::string name = v ? *v : "";
-      if (name == "velocity") s.output.velocity = true;
-      else if (name == "angular_velocity") s.output.angular_velocity = true;
-      else if (name == "force") s.output.force = true;
-      else if (name == "torque") s.output.torque = true;
-      else if (name == "stresslet") s.output.stresslet = true;
-      else R.fail(&e, "[output] record", "\"" + name + "\" is not one of \"velocity\", \"angular_velocity\", \"force\", \"torque\", \"stresslet\"");
+      if (!v) R.fail(&e, "[output] record", "expected a string, got " + Reader::type_name(e));
+      names.insert(*v);
     }
+    s.output.record.assign(names.begin(), names.end());
   }
 
   // Consistency checks across tables.
@@ -432,7 +438,7 @@ std::string resolved_toml(const Scene& s) {
     return a;
   };
   toml::table root;
-  toml::table dom{{"kind", s.domain.periodic() ? "periodic" : "open"}};
+  toml::table dom{{"kind", name_of(s.domain.kind)}};
   if (s.domain.periodic()) {
     dom.insert("box", vec(s.domain.box));
     dom.insert("shear_strain", s.domain.shear_strain);
@@ -449,50 +455,39 @@ std::string resolved_toml(const Scene& s) {
   toml::array pair;
   for (const PairForceParams& p : s.forces.pair) {
     toml::table t{{"cutoff", p.cutoff}};
+    t.insert("kind", name_of(p.kind));
     if (p.kind == PairForceParams::Kind::morse) {
-      t.insert("kind", "morse");
       t.insert("depth", p.morse_depth);
       t.insert("kappa", p.morse_kappa);
     } else if (p.kind == PairForceParams::Kind::dlvo) {
-      t.insert("kind", "dlvo");
       t.insert("hamaker", p.hamaker);
       t.insert("debye_kappa", p.debye_kappa);
       t.insert("surface_potential", p.surface_potential);
       t.insert("surface_potential_reduced", p.surface_potential_reduced);
       t.insert("born_sigma", p.born_sigma);
       t.insert("min_gap", p.min_gap);
-      t.insert("double_layer", p.double_layer == PairForceParams::DoubleLayer::lsa ? "lsa" : "hhf");
+      t.insert("double_layer", name_of(p.double_layer));
     } else {
-      t.insert("kind", "hertz");
       t.insert("stiffness", p.hertz_stiffness);
     }
     pair.push_back(t);
   }
   if (!pair.empty()) forces.insert("pair", pair);
   root.insert("forces", forces);
-  const char* flows[] = {"none", "simple_shear", "planar_extension"};
-  root.insert("flow", toml::table{{"kind", flows[int(s.flow.kind)]}, {"rate", s.flow.rate}});
-  const char* models[] = {"auto", "free_draining", "far_field", "stokesian"};
-  const char* moments[] = {"auto", "F", "FT", "FTS"};
-  const char* methods[] = {"auto", "direct", "ewald", "pme", "tree"};
-  root.insert("hydrodynamics", toml::table{{"model", models[int(s.hydro.model)]},
-                                           {"moments", moments[int(s.hydro.moments)]},
-                                           {"far_field", methods[int(s.hydro.far_field)]},
+  root.insert("flow", toml::table{{"kind", name_of(s.flow.kind)}, {"rate", s.flow.rate}});
+  root.insert("hydrodynamics", toml::table{{"model", name_of(s.hydro.model)},
+                                           {"moments", name_of(s.hydro.moments)},
+                                           {"far_field", s.hydro.far_field},
                                            {"tolerance", s.hydro.tolerance},
                                            {"lubrication_cutoff", s.hydro.lubrication_cutoff},
                                            {"lubrication_min_gap", s.hydro.lubrication_min_gap}});
   root.insert("brownian", toml::table{{"seed", int64_t(s.seed)}});
-  const char* integrators[] = {"euler", "midpoint", "rkf45"};
   root.insert("time", toml::table{{"dt", s.time.dt},
                                   {"steps", int64_t(s.time.steps)},
-                                  {"integrator", integrators[int(s.time.integrator)]},
+                                  {"integrator", s.time.integrator},
                                   {"rkf_tolerance", s.time.rkf_tolerance}});
   toml::array record;
-  if (s.output.velocity) record.push_back("velocity");
-  if (s.output.angular_velocity) record.push_back("angular_velocity");
-  if (s.output.force) record.push_back("force");
-  if (s.output.torque) record.push_back("torque");
-  if (s.output.stresslet) record.push_back("stresslet");
+  for (const auto& name : s.output.record) record.push_back(name);
   root.insert("output", toml::table{{"every", int64_t(s.output.every)},
                                     {"checkpoint_every", int64_t(s.output.checkpoint_every)},
                                     {"record", record},
@@ -501,6 +496,15 @@ std::string resolved_toml(const Scene& s) {
   o.precision(17);
   o << "# Fully resolved scene (every key explicit; generated particles listed). Re-run it as is.\n" << root << "\n";
   return o.str();
+}
+
+bool same_scene(const std::string& a, const std::string& b) {
+  if (a == b) return true;
+  try {
+    return resolved_toml(parse_scene(a, "stored scene")) == resolved_toml(parse_scene(b, "stored scene"));
+  } catch (const ConfigError&) {
+    return false;
+  }
 }
 
 Scene load_scene(const std::string& path) {

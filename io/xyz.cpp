@@ -1,5 +1,8 @@
 #include "io/xyz.hpp"
 
+#include "engine/core/errors.hpp"
+#include "io/h5md.hpp"
+
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
@@ -200,8 +203,12 @@ std::vector<XyzFrame> read_xyz(const std::string& path) {
 }
 
 void write_xyz_frame(std::ostream& os, const Frame& f, const Domain& domain, const std::vector<std::string>& species) {
-  const std::size_t n = f.position.size();
-  if (!f.radius.empty() && f.radius.size() != n) throw IoError("XYZ export: radius and position sizes differ");
+  static const std::vector<double> none;
+  const std::vector<double>& pos = f.particles.at("position").values;
+  auto r = f.particles.find("radius");
+  const std::vector<double>& radius = r == f.particles.end() ? none : r->second.values;
+  const std::size_t n = pos.size() / 3;
+  if (!radius.empty() && radius.size() != n) throw IoError("XYZ export: radius and position sizes differ");
   if (!species.empty() && species.size() != n) throw IoError("XYZ export: species and position sizes differ");
   os << n << '\n';
   if (domain.periodic()) {
@@ -214,18 +221,18 @@ void write_xyz_frame(std::ostream& os, const Frame& f, const Domain& domain, con
     }
     os << "\" pbc=\"T T T\" ";
   }
-  os << "Properties=species:S:1:pos:R:3" << (f.radius.empty() ? "" : ":radius:R:1") << " Time=";
+  os << "Properties=species:S:1:pos:R:3" << (radius.empty() ? "" : ":radius:R:1") << " Time=";
   put(os, f.time);
   os << " Step=" << f.step << '\n';
   for (std::size_t i = 0; i < n; ++i) {
     os << (species.empty() ? std::string("P") : species[i]);
     for (int k = 0; k < 3; ++k) {
       os << ' ';
-      put(os, f.position[i][k]);
+      put(os, pos[3 * i + std::size_t(k)]);
     }
-    if (!f.radius.empty()) {
+    if (!radius.empty()) {
       os << ' ';
-      put(os, f.radius[i]);
+      put(os, radius[i]);
     }
     os << '\n';
   }

@@ -6,8 +6,9 @@
 // Lattice (rows = cell vectors) is written for periodic boxes only; with Lees-Edwards strain g the
 // second vector is (g Ly, Ly, 0). Numbers are printed with 17 significant digits, so reading a
 // file back reproduces the doubles exactly.
-#include "engine/state.hpp"
-#include "io/h5md.hpp"
+#include "engine/core/domain.hpp"
+#include "engine/core/frame.hpp"
+#include "engine/core/types.hpp"
 
 #include <cstdint>
 #include <fstream>

@@ -1,6 +1,6 @@
 #include "lubrication/cholmod_factor.hpp"
 
-#include "engine/errors.hpp"
+#include "engine/core/errors.hpp"
 
 #include <cholmod.h>
 

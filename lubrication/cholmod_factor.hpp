@@ -10,7 +10,7 @@
 //                  near-field Brownian force of shared/notes/method.md s.5.
 // A matrix that is not positive definite raises NotPositiveDefinite (engine/errors.hpp) with the
 // failing column; NearField::factorize translates it into the particle and its closest pair.
-#include "engine/types.hpp"
+#include "engine/core/types.hpp"
 
 #include <Eigen/SparseCore>
 

@@ -1,13 +1,15 @@
 #include "lubrication/near_field.hpp"
 
-#include "engine/far_field.hpp"
+#include "engine/core/parallel.hpp"
+
+#include "engine/kernels/far_field.hpp"
 #include "trees/neighbor_list.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <sstream>
 
-#include "engine/errors.hpp"
+#include "engine/core/errors.hpp"
 
 namespace stokesian::lubrication {
 
@@ -58,7 +60,7 @@ SparseMatrix NearField::assemble(const std::vector<Vec3>& x, const std::vector<d
   std::vector<MatX> blocks(pairs.size());
   std::vector<char> inside(pairs.size(), 0);
   NearFieldStats st;
-#pragma omp parallel for schedule(dynamic, 8) if (pairs.size() >= 64)  // each pair block costs ~50 us
+#pragma omp parallel for schedule(dynamic, 8) if (long(pairs.size()) >= parallel::kNearFieldPairs)
   for (long k = 0; k < long(pairs.size()); ++k) {
     const auto& p = pairs[std::size_t(k)];
     const double ai = a[std::size_t(p.i)], aj = a[std::size_t(p.j)];

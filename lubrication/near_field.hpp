@@ -12,8 +12,8 @@
 // both spheres, so the pair block obeys Newton's third law and the lambda <-> 1/lambda relations).
 // Pairs with xi < xi_min are evaluated at xi_min along their line of centres (regularised
 // minimum gap) and counted; overlaps (xi < 0) are counted separately.
-#include "engine/state.hpp"
-#include "engine/types.hpp"
+#include "engine/core/domain.hpp"
+#include "engine/core/types.hpp"
 #include "lubrication/cholmod_factor.hpp"
 #include "lubrication/resistance_table.hpp"
 

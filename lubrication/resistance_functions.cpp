@@ -39,7 +39,7 @@
 
 #include "lubrication/resistance_functions.hpp"
 
-#include "engine/sym_traceless.hpp"
+#include "engine/core/sym_traceless.hpp"
 
 #include <cmath>
 #include <algorithm>
@@ -782,12 +782,11 @@ PairMatrix two_sphere_resistance(const Eigen::Vector3d& r_vec, double a1, double
                                  const ResistanceScalars& s22_21) {
   const double r = r_vec.norm();
   const Eigen::Vector3d d = r_vec / r;
-  const double pi = 3.14159265358979323846;
+  const double pi = kPi;
   const double rad[2] = {a1, a2};
   auto dl = [](int i, int j) { return i == j ? 1.0 : 0.0; };
   // Basis of symmetric traceless tensors.
-  Mat3 basis[5];
-  for (int m = 0; m < 5; ++m) basis[m] = from_vec5(Vec5::Unit(m));
+  const auto& basis = sym_traceless_basis();
 
   // Tensors of the ordered pair (a, b) acting as in the class comment.
   struct Blocks {

@@ -1,7 +1,7 @@
 // CHOLMOD wrapper: solve and factor product against dense Eigen, symbolic reuse, failure report.
 #include <doctest/doctest.h>
 
-#include "engine/errors.hpp"
+#include "engine/core/errors.hpp"
 #include "lubrication/cholmod_factor.hpp"
 #include "lubrication/near_field.hpp"
 

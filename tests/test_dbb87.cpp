@@ -175,7 +175,7 @@ Path settle_three(const char* moments) {
        << "[forces]\nexternal_force = [0.0, 0.0, -1.0]\n"
        << "[hydrodynamics]\nmodel = \"stokesian\"\nmoments = \"" << moments << "\"\n"
        << "[time]\ndt = 1.0\nsteps = 100000\nintegrator = \"rkf45\"\nrkf_tolerance = 1e-7\n";
-  const Simulation sim(io::parse_scene(toml.str(), "dbb87_fig5.toml"));
+  Simulation sim(io::parse_scene(toml.str(), "dbb87_fig5.toml"));
   State s = sim.initial_state();
   std::mt19937_64 rng(1);
   Path p;

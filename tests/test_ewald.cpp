@@ -6,8 +6,8 @@
 // y = M x on random Gaussian x (fixed seeds).
 #include <doctest/doctest.h>
 
-#include "engine/far_field.hpp"
-#include "engine/mobility_pair.hpp"
+#include "engine/kernels/far_field.hpp"
+#include "engine/kernels/mobility_pair.hpp"
 #include "ewald/ewald_reference.hpp"
 #include "ewald/ewald_split.hpp"
 #include "ewald/pme.hpp"

@@ -15,7 +15,7 @@ double final_error_single(const std::string& integrator, double dt, double t_end
   std::ostringstream t;
   t << "[particles]\npositions = [[1.0, 2.0, 0.5]]\n[flow]\nkind = \"planar_extension\"\nrate = 0.5\n"
     << "[time]\ndt = " << dt << "\nintegrator = \"" << integrator << "\"\nrkf_tolerance = " << rkf_tol << "\n";
-  const Simulation sim(io::parse_scene(t.str(), "ext.toml"));
+  Simulation sim(io::parse_scene(t.str(), "ext.toml"));
   State s = sim.initial_state();
   std::mt19937_64 rng(1);
   while (s.time < t_end - 1e-12) {

@@ -47,40 +47,49 @@ double datum(std::int64_t step, std::size_t i, int quantity, int comp) {
   return 1000.0 * quantity + static_cast<double>(step) + 0.001 * static_cast<double>(i) + 1e-7 * comp;
 }
 
-io::Frame make_frame(std::int64_t step, std::size_t n, const io::Quantities& q) {
-  io::Frame f;
-  f.step = step;
-  f.time = 0.01 * static_cast<double>(step);
-  f.shear_strain = 0.001 * static_cast<double>(step);
-  auto vecs = [&](std::vector<Vec3>& v, int quantity) {
-    v.resize(n);
-    for (std::size_t i = 0; i < n; ++i)
-      for (int c = 0; c < 3; ++c) v[i][c] = datum(step, i, quantity, c);
-  };
-  vecs(f.position, 0);
-  if (q.velocity) vecs(f.velocity, 1);
-  if (q.angular_velocity) vecs(f.angular_velocity, 2);
-  if (q.force) vecs(f.force, 3);
-  if (q.torque) vecs(f.torque, 4);
-  if (q.stresslet) {
-    f.stresslet.resize(n);
-    for (std::size_t i = 0; i < n; ++i)
-      for (int c = 0; c < 6; ++c) f.stresslet[i][c] = datum(step, i, 5, c);
-  }
-  f.radius.resize(n);
-  for (std::size_t i = 0; i < n; ++i) f.radius[i] = 1.0 + 0.01 * static_cast<double>(i);
-  f.scalars["energy"] = 2.0 * static_cast<double>(step);
+// Per-particle fields of a trajectory: position, the optional kinematic quantities, radius.
+std::vector<FieldSpec> fields_of(bool velocity = true, bool angular_velocity = true, bool force = true,
+                                 bool torque = true, bool stresslet = true) {
+  std::vector<FieldSpec> f{{"position", {3}, {}}};
+  if (velocity) f.push_back({"velocity", {3}, {}});
+  if (angular_velocity) f.push_back({"angular_velocity", {3}, {}});
+  if (force) f.push_back({"force", {3}, {}});
+  if (torque) f.push_back({"torque", {3}, {}});
+  if (stresslet) f.push_back({"stresslet", {6}, {"xx", "xy", "xz", "yy", "yz", "zz"}});
+  f.push_back({"radius", {}, {}});
   return f;
 }
 
-io::TrajectoryHeader make_header(std::size_t n, bool periodic, bool sheared = false) {
-  io::TrajectoryHeader h;
+Frame make_frame(std::int64_t step, std::size_t n, const std::vector<FieldSpec>& fields) {
+  static const std::vector<std::string> order{"position", "velocity", "angular_velocity", "force", "torque", "stresslet"};
+  Frame f;
+  f.step = step;
+  f.time = 0.01 * static_cast<double>(step);
+  f.shear_strain = 0.001 * static_cast<double>(step);
+  for (const FieldSpec& spec : fields) {
+    Field& field = f.particles[spec.name];
+    field.shape = spec.shape;
+    if (spec.name == "radius") {
+      for (std::size_t i = 0; i < n; ++i) field.values.push_back(1.0 + 0.01 * static_cast<double>(i));
+      continue;
+    }
+    const int quantity = int(std::find(order.begin(), order.end(), spec.name) - order.begin());
+    for (std::size_t i = 0; i < n; ++i)
+      for (int c = 0; c < spec.item_size(); ++c) field.values.push_back(datum(step, i, quantity, c));
+  }
+  f.set_scalar("energy", 2.0 * static_cast<double>(step));
+  return f;
+}
+
+RunHeader make_header(std::size_t n, bool periodic, bool sheared = false) {
+  RunHeader h;
   h.particles = n;
   if (periodic) {
     h.domain.kind = Domain::Kind::periodic;
     h.domain.box = Vec3(10.0, 12.0, 14.0);
   }
   h.sheared_box = sheared;
+  h.particle_fields = fields_of();
   h.scene_toml = "[time]\ndt = 0.01\nsteps = 100\n";
   h.model = "stokesian FTS, far field direct";
   h.author = "test";
@@ -202,8 +211,8 @@ TEST_CASE("H5MD layout: names, shapes, attributes and values read back with the 
   auto h = make_header(n, true);
   auto t = io::Trajectory::create(path, h);
   for (std::int64_t s : {0, 10, 20}) {
-    auto fr = make_frame(s, n, h.record);
-    if (s != 10) fr.vectors["stress"] = {1.0 * s, 2.0, 3.0, 4.0, 5.0, 6.0};
+    auto fr = make_frame(s, n, h.particle_fields);
+    if (s != 10) fr.observables["stress"] = Field{{6}, {1.0 * s, 2.0, 3.0, 4.0, 5.0, 6.0}};
     t.append(fr);
   }
   CHECK(t.committed_frames() == 0);
@@ -278,9 +287,9 @@ TEST_CASE("H5MD layout: open box without edges, absent quantities, sheared perio
   const std::size_t n = 3;
   SUBCASE("open box, positions and velocities only") {
     auto h = make_header(n, false);
-    h.record = {true, false, false, false, false};
+    h.particle_fields = fields_of(true, false, false, false, false);
     auto t = io::Trajectory::create(tmp / "a.h5", h);
-    t.append(make_frame(1, n, h.record));
+    t.append(make_frame(1, n, h.particle_fields));
     t.commit();
     File f(tmp / "a.h5");
     CHECK(read_str_attr(f.id, "/particles/all/box", "boundary") == std::vector<std::string>{"none", "none", "none"});
@@ -290,14 +299,14 @@ TEST_CASE("H5MD layout: open box without edges, absent quantities, sheared perio
                           "/particles/all/stresslet"})
       CHECK(!exists_link(f.id, q));
     const auto info = io::inspect_trajectory(tmp / "a.h5");
-    CHECK(!info.record.force);
-    CHECK(info.record.velocity);
+    CHECK(!info.records("force"));
+    CHECK(info.records("velocity"));
   }
   SUBCASE("Lees-Edwards: triclinic edges per frame, clock shared with position") {
     auto h = make_header(n, true, true);
     auto t = io::Trajectory::create(tmp / "b.h5", h);
-    t.append(make_frame(0, n, h.record));
-    t.append(make_frame(50, n, h.record));
+    t.append(make_frame(0, n, h.particle_fields));
+    t.append(make_frame(50, n, h.particle_fields));
     t.commit();
     File f(tmp / "b.h5");
     CHECK(shape(f.id, "/particles/all/box/edges/value") == std::vector<hsize_t>{2, 3, 3});
@@ -316,9 +325,9 @@ TEST_CASE("commit and resume: the trajectory keeps exactly the frames up to the 
   const auto h = make_header(n, false);
   {
     auto out = io::RunOutput::start(path, h);
-    for (std::int64_t s = 0; s <= 20; s += 5) out.record(make_frame(s, n, h.record));
+    for (std::int64_t s = 0; s <= 20; s += 5) out.record(make_frame(s, n, h.particle_fields));
     out.checkpoint(make_state(n, 20), {{"accumulated_stress", 0.125}}, {{"note", "x"}});
-    for (std::int64_t s = 25; s <= 30; s += 5) out.record(make_frame(s, n, h.record));
+    for (std::int64_t s = 25; s <= 30; s += 5) out.record(make_frame(s, n, h.particle_fields));
     out.trajectory().commit();  // frames beyond the checkpoint reach the file
     CHECK(io::inspect_trajectory(path).last_step == 30);
   }
@@ -334,16 +343,16 @@ TEST_CASE("commit and resume: the trajectory keeps exactly the frames up to the 
     CHECK(read_all<double>(f.id, "/observables/energy/value", H5T_NATIVE_DOUBLE).size() == 5);
   }
   // The shadow was recreated: the run goes on appending through it.
-  for (std::int64_t s = 25; s <= 40; s += 5) out.record(make_frame(s, n, h.record));
+  for (std::int64_t s = 25; s <= 40; s += 5) out.record(make_frame(s, n, h.particle_fields));
   out.checkpoint(make_state(n, 40));
   CHECK(verify_frames(path, n, 5) == std::vector<std::int64_t>{0, 5, 10, 15, 20, 25, 30, 35, 40});
   CHECK(io::inspect_trajectory(out.trajectory().shadow_path()).frames == 5);  // lags one commit
 
   SUBCASE("a frame after the checkpointed state is refused") {
-    out.record(make_frame(45, n, h.record));
-    CHECK_THROWS_AS(out.checkpoint(make_state(n, 44)), io::IoError);
+    out.record(make_frame(45, n, h.particle_fields));
+    CHECK_THROWS_AS(out.checkpoint(make_state(n, 44)), IoError);
   }
-  SUBCASE("steps must increase") { CHECK_THROWS_AS(out.record(make_frame(40, n, h.record)), io::IoError); }
+  SUBCASE("steps must increase") { CHECK_THROWS_AS(out.record(make_frame(40, n, h.particle_fields)), IoError); }
 }
 
 TEST_CASE("a full frame buffer is committed early; resume still truncates to the checkpoint") {
@@ -354,9 +363,9 @@ TEST_CASE("a full frame buffer is committed early; resume still truncates to the
   auto out = io::RunOutput::start(path, h);
   // One frame: 10 x (5 x 3 + 6 + 1) doubles = 1760 bytes; a 4000-byte budget commits every 3rd.
   out.trajectory().max_pending_bytes = 4000;
-  out.record(make_frame(1, n, h.record));
+  out.record(make_frame(1, n, h.particle_fields));
   out.checkpoint(make_state(n, 1));
-  for (std::int64_t s = 2; s <= 7; ++s) out.record(make_frame(s, n, h.record));
+  for (std::int64_t s = 2; s <= 7; ++s) out.record(make_frame(s, n, h.particle_fields));
   CHECK(out.trajectory().committed_frames() == 7);
   CHECK(out.trajectory().pending_frames() == 0);
   CHECK(verify_frames(path, n).size() == 7);
@@ -373,7 +382,7 @@ TEST_CASE("resume repairs a missing or damaged shadow and refuses inconsistent i
   {
     auto out = io::RunOutput::start(path, h);
     for (std::int64_t s = 1; s <= 6; ++s) {
-      out.record(make_frame(s, n, h.record));
+      out.record(make_frame(s, n, h.particle_fields));
       if (s % 2 == 0) out.checkpoint(make_state(n, s));
     }
   }
@@ -382,10 +391,10 @@ TEST_CASE("resume repairs a missing or damaged shadow and refuses inconsistent i
     { std::ofstream(path + ".shadow") << "not an HDF5 file"; }
     auto out = io::RunOutput::resume(path, h, ck);
     { std::ofstream(path + ".shadow") << "garbage again"; }
-    out.record(make_frame(7, n, h.record));
+    out.record(make_frame(7, n, h.particle_fields));
     out.checkpoint(make_state(n, 7));
     CHECK(verify_frames(path, n).back() == 7);
-    out.record(make_frame(8, n, h.record));
+    out.record(make_frame(8, n, h.particle_fields));
     out.checkpoint(make_state(n, 8));
     CHECK(verify_frames(path, n).size() == 8);
   }
@@ -400,30 +409,30 @@ TEST_CASE("resume repairs a missing or damaged shadow and refuses inconsistent i
     try {
       io::RunOutput::resume(path, h, ck);
       FAIL("resume should refuse");
-    } catch (const io::IoError& e) {
+    } catch (const IoError& e) {
       CHECK(std::string(e.what()).find("inconsistent") != std::string::npos);
       CHECK(std::string(e.what()).find(path) != std::string::npos);
     }
   }
   SUBCASE("different particle number") {
     auto h2 = make_header(n + 1, true);
-    CHECK_THROWS_WITH_AS(io::RunOutput::resume(path, h2, ck), has("particles"), io::IoError);
+    CHECK_THROWS_WITH_AS(io::RunOutput::resume(path, h2, ck), has("particles"), IoError);
   }
   SUBCASE("different scene") {
     auto h2 = h;
     h2.scene_toml += "# edited\n";
-    CHECK_THROWS_WITH_AS(io::RunOutput::resume(path, h2, ck), has("scene"), io::IoError);
+    CHECK_THROWS_WITH_AS(io::RunOutput::resume(path, h2, ck), has("scene"), IoError);
   }
   SUBCASE("checkpoint from another trajectory (frame count)") {
     auto c = io::read_checkpoint(io::checkpoint_path(path));
     c.trajectory_frames += 1;
     io::write_checkpoint(io::checkpoint_path(path), c);
-    CHECK_THROWS_WITH_AS(io::RunOutput::resume(path, h, ck), has("inconsistent"), io::IoError);
+    CHECK_THROWS_WITH_AS(io::RunOutput::resume(path, h, ck), has("inconsistent"), IoError);
     CHECK(verify_frames(path, n).size() == 6);  // the refused resume left the file alone
   }
   SUBCASE("no checkpoint") {
     fs::remove(io::checkpoint_path(path));
-    CHECK_THROWS_WITH_AS(io::RunOutput::resume(path, h, ck), has("no checkpoint"), io::IoError);
+    CHECK_THROWS_WITH_AS(io::RunOutput::resume(path, h, ck), has("no checkpoint"), IoError);
   }
 }
 
@@ -437,7 +446,7 @@ TEST_CASE("resume from every intermediate state of the commit protocol") {
   {
     auto out = io::RunOutput::start(P, h);
     for (std::int64_t s = 1; s <= 9; ++s) {
-      out.record(make_frame(s, n, h.record));
+      out.record(make_frame(s, n, h.particle_fields));
       if (s == 6) out.checkpoint(make_state(n, 6));
     }
     out.trajectory().commit();  // P: steps 1..9, S: 1..6, checkpoint: step 6
@@ -461,7 +470,7 @@ TEST_CASE("resume from every intermediate state of the commit protocol") {
   CHECK(verify_frames(P, n) == std::vector<std::int64_t>{1, 2, 3, 4, 5, 6});
   CHECK(!fs::exists(old));
   CHECK(io::inspect_trajectory(S).frames == 6);
-  out.record(make_frame(7, n, h.record));
+  out.record(make_frame(7, n, h.particle_fields));
   out.checkpoint(make_state(n, 7));
   CHECK(verify_frames(P, n).back() == 7);
 }
@@ -475,7 +484,7 @@ TEST_CASE("a reader holding the trajectory open does not block commits") {
   const std::size_t n = 3;
   const auto h = make_header(n, false);
   auto out = io::RunOutput::start(P, h);
-  out.record(make_frame(1, n, h.record));
+  out.record(make_frame(1, n, h.particle_fields));
   out.checkpoint(make_state(n, 1));
   int fds[2];
   REQUIRE(pipe(fds) == 0);
@@ -492,7 +501,7 @@ TEST_CASE("a reader holding the trajectory open does not block commits") {
   REQUIRE(read(fds[0], &ok, 1) == 1);
   CHECK(ok == 'y');
   for (std::int64_t s = 2; s <= 5; ++s) {
-    out.record(make_frame(s, n, h.record));
+    out.record(make_frame(s, n, h.particle_fields));
     CHECK_NOTHROW(out.checkpoint(make_state(n, s)));
   }
   kill(pid, SIGKILL);
@@ -518,7 +527,7 @@ TEST_CASE("SIGKILL at random moments never corrupts the trajectory, and resume a
   {
     // The run starts here, so that every child (however slowly it starts) has a checkpoint.
     auto out = io::RunOutput::start(path, h);
-    out.record(make_frame(0, n, h.record));
+    out.record(make_frame(0, n, h.particle_fields));
     out.checkpoint(make_state(n, 0));
   }
   int with_checkpoint = 0, total_frames_seen = 0, left_old = 0, left_tmp = 0, left_ckpt_tmp = 0, shadow_damaged = 0;
@@ -533,7 +542,7 @@ TEST_CASE("SIGKILL at random moments never corrupts the trajectory, and resume a
         std::int64_t step = ck.state.step;
         for (;;) {
           ++step;
-          out->record(make_frame(step, n, h.record));
+          out->record(make_frame(step, n, h.particle_fields));
           if (step % 3 == 0) out->checkpoint(make_state(n, step));
         }
       } catch (const std::exception& e) {
@@ -553,7 +562,7 @@ TEST_CASE("SIGKILL at random moments never corrupts the trajectory, and resume a
     if (fs::exists(io::checkpoint_path(path) + ".tmp")) ++left_ckpt_tmp;
     try {
       io::inspect_trajectory(path + ".shadow");
-    } catch (const io::IoError&) {
+    } catch (const IoError&) {
       ++shadow_damaged;
     }
     if (fs::exists(path)) {
@@ -583,7 +592,7 @@ TEST_CASE("SIGKILL at random moments never corrupts the trajectory, and resume a
   CHECK(steps.back() == ck.state.step);
   CHECK(static_cast<std::int64_t>(steps.size()) == ck.trajectory_frames);
   CHECK(ck.state.position[7] == make_state(n, ck.state.step).position[7]);
-  out.record(make_frame(ck.state.step + 1, n, h.record));
+  out.record(make_frame(ck.state.step + 1, n, h.particle_fields));
   out.checkpoint(make_state(n, ck.state.step + 1));
   CHECK(verify_frames(path, n).back() == ck.state.step + 1);
 }
@@ -643,11 +652,11 @@ TEST_CASE("checkpoint round trip is bit-exact; damage is detected") {
   SUBCASE("one flipped bit") {
     bytes[bytes.size() / 2] ^= 0x10;
     std::ofstream(path, std::ios::binary) << bytes;
-    CHECK_THROWS_WITH_AS(io::read_checkpoint(path), has("checksum"), io::IoError);
+    CHECK_THROWS_WITH_AS(io::read_checkpoint(path), has("checksum"), IoError);
   }
   SUBCASE("truncated") {
     std::ofstream(path, std::ios::binary) << bytes.substr(0, bytes.size() - 5);
-    CHECK_THROWS_WITH_AS(io::read_checkpoint(path), has(path), io::IoError);
+    CHECK_THROWS_WITH_AS(io::read_checkpoint(path), has(path), IoError);
   }
 }
 
@@ -658,12 +667,12 @@ TEST_CASE("extended XYZ: write and read back, lattice with Lees-Edwards strain, 
   dom.kind = Domain::Kind::periodic;
   dom.box = Vec3(10, 12, 14);
   const std::size_t n = 4;
-  io::Quantities q;
+  const auto q = fields_of();
   {
     io::XyzWriter w(path, dom, {"W", "P", "P", "P"});
     for (std::int64_t s : {0, 10, 20}) {
       auto f = make_frame(s, n, q);
-      f.position[1].x() = 1.0 / 3.0;
+      f.particles["position"].values[3] = 1.0 / 3.0;
       w.write(f);
     }
   }
@@ -698,20 +707,20 @@ TEST_CASE("extended XYZ: write and read back, lattice with Lees-Edwards strain, 
 TEST_CASE("errors name the file and the problem") {
   TempDir tmp;
   const std::string missing = tmp / "nope.h5";
-  CHECK_THROWS_WITH_AS(io::read_last_frame(missing), has(missing + ": file does not exist"), io::IoError);
-  CHECK_THROWS_WITH_AS(io::read_checkpoint(missing), has(missing), io::IoError);
-  CHECK_THROWS_WITH_AS(io::read_xyz(missing), has(missing), io::IoError);
+  CHECK_THROWS_WITH_AS(io::read_last_frame(missing), has(missing + ": file does not exist"), IoError);
+  CHECK_THROWS_WITH_AS(io::read_checkpoint(missing), has(missing), IoError);
+  CHECK_THROWS_WITH_AS(io::read_xyz(missing), has(missing), IoError);
 
   const std::string text = tmp / "text.h5";
   { std::ofstream(text) << "plain text"; }
-  CHECK_THROWS_WITH_AS(io::read_last_frame(text), has("cannot open as HDF5"), io::IoError);
+  CHECK_THROWS_WITH_AS(io::read_last_frame(text), has("cannot open as HDF5"), IoError);
 
   // An HDF5 file with positions but no radius dataset.
   const std::string partial = tmp / "partial.h5";
   {
     auto h = make_header(2, false);
     auto t = io::Trajectory::create(partial, h);
-    t.append(make_frame(3, 2, h.record));
+    t.append(make_frame(3, 2, h.particle_fields));
     t.commit();
     hid_t f = H5Fopen(partial.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
     REQUIRE(f >= 0);
@@ -719,25 +728,25 @@ TEST_CASE("errors name the file and the problem") {
     H5Fclose(f);
   }
   CHECK_THROWS_WITH_AS(io::read_last_frame(partial),
-                       has(partial + ": missing dataset /particles/all/radius/value"), io::IoError);
-  CHECK_THROWS_WITH_AS(io::inspect_trajectory(partial), has("radius"), io::IoError);
+                       has(partial + ": missing dataset /particles/all/radius/value"), IoError);
+  CHECK_THROWS_WITH_AS(io::inspect_trajectory(partial), has("radius"), IoError);
 
   // An empty trajectory has no last frame.
   const std::string empty = tmp / "empty.h5";
   io::Trajectory::create(empty, make_header(2, false));
-  CHECK_THROWS_WITH_AS(io::read_last_frame(empty), has("holds no frames"), io::IoError);
+  CHECK_THROWS_WITH_AS(io::read_last_frame(empty), has("holds no frames"), IoError);
 
   // XYZ errors carry file:line.
   const std::string bad = tmp / "bad.xyz";
   { std::ofstream(bad) << "2\nProperties=species:S:1:pos:R:3:radius:R:1\nA 0 0 0 1\nB 1 x 3 1\n"; }
-  CHECK_THROWS_WITH_AS(io::read_xyz(bad), has(bad + ":4: cannot read a coordinate"), io::IoError);
+  CHECK_THROWS_WITH_AS(io::read_xyz(bad), has(bad + ":4: cannot read a coordinate"), IoError);
   { std::ofstream(bad) << "3\ncomment\nA 0 0 0\n"; }
-  CHECK_THROWS_WITH_AS(io::read_xyz(bad), has(bad + ":4: file ends after 1 of 3"), io::IoError);
+  CHECK_THROWS_WITH_AS(io::read_xyz(bad), has(bad + ":4: file ends after 1 of 3"), IoError);
   { std::ofstream(bad) << "2\nProperties=species:S:1:radius:R:1\nA 1\nB 1\n"; }
-  CHECK_THROWS_WITH_AS(io::read_xyz(bad), has("no pos:R:3"), io::IoError);
+  CHECK_THROWS_WITH_AS(io::read_xyz(bad), has("no pos:R:3"), IoError);
 
   // Frames with the wrong particle count are refused at append time.
   auto h = make_header(3, false);
   auto t = io::Trajectory::create(tmp / "x.h5", h);
-  CHECK_THROWS_WITH_AS(t.append(make_frame(0, 2, h.record)), has("2 position entries for 3"), io::IoError);
+  CHECK_THROWS_WITH_AS(t.append(make_frame(0, 2, h.particle_fields)), has("2 position entries for 3"), IoError);
 }

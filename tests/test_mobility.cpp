@@ -2,8 +2,8 @@
 // and the matrix-free product against the dense reference.
 #include <doctest/doctest.h>
 
-#include "engine/far_field.hpp"
-#include "engine/mobility_pair.hpp"
+#include "engine/kernels/far_field.hpp"
+#include "engine/kernels/mobility_pair.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <cmath>

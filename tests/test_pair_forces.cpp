@@ -17,7 +17,6 @@ using Kind = PairForceParams::Kind;
 namespace {
 
 const double kRatios[] = {0.1, 0.5, 1.0, 2.0, 10.0};
-constexpr double kPi = 3.14159265358979323846;
 
 PairForceParams morse_params() {
   PairForceParams p;

@@ -27,7 +27,7 @@ double measured_period(double edge, const char* moments, double t_end) {
   toml << "]\n[forces]\nexternal_force = [0.0, 0.0, -1.0]\n[[forces.pair]]\nkind = \"hertz\"\n"
        << "[hydrodynamics]\nmodel = \"far_field\"\nmoments = \"" << moments << "\"\ntolerance = 1e-10\n"
        << "[time]\ndt = 1.0\nsteps = 100000\nintegrator = \"rkf45\"\nrkf_tolerance = 1e-8\n";
-  const Simulation sim(io::parse_scene(toml.str(), "cube.toml"));
+  Simulation sim(io::parse_scene(toml.str(), "cube.toml"));
   State s = sim.initial_state();
   std::mt19937_64 rng(1);
   const double U0 = 1.0 / (6.0 * M_PI);

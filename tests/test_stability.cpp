@@ -15,16 +15,16 @@ struct Outcome {
   long max_overlaps = 0;
 };
 Outcome run_steps(const std::string& toml, int steps) {
-  const Simulation sim(io::parse_scene(toml, "stability.toml"));
+  Simulation sim(io::parse_scene(toml, "stability.toml"));
   State s = sim.initial_state();
   std::mt19937_64 rng(5);
   Outcome o;
   for (int k = 0; k < steps; ++k) {
     const Evaluation ev = sim.evaluate(s, s.position);
     for (const Vec3& u : ev.hydro.U) REQUIRE(u.allFinite());
-    const io::Frame f = sim.frame(s, ev);
-    o.min_gap = std::min(o.min_gap, f.scalars.at("min_gap"));
-    o.max_overlaps = std::max(o.max_overlaps, long(f.scalars.at("overlaps")));
+    const Frame f = sim.frame(s, ev);
+    o.min_gap = std::min(o.min_gap, f.scalar("min_gap"));
+    o.max_overlaps = std::max(o.max_overlaps, long(f.scalar("overlaps")));
     sim.advance(s, ev, rng);
   }
   return o;

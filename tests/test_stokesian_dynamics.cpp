@@ -2,7 +2,7 @@
 // sparse/dense near-field twins, symmetry and positive definiteness, unequal spheres.
 #include <doctest/doctest.h>
 
-#include "engine/far_field.hpp"
+#include "engine/kernels/far_field.hpp"
 #include "engine/sd_dense.hpp"
 #include "lubrication/near_field.hpp"
 

@@ -1,6 +1,8 @@
 // Cell-list neighbour search; the geometry and the contract are stated in neighbor_list.hpp.
 #include "trees/neighbor_list.hpp"
 
+#include "engine/core/parallel.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -77,15 +79,13 @@ bool build_grid(const std::vector<Vec3>& x, const Domain& domain, double range, 
   std::vector<Vec3> s(N);  // cell coordinate in units of the whole grid, in [0, 1)
   if (domain.periodic()) {
     const Vec3& L = domain.box;
-    // Same lattice, smallest tilt: gamma' = gamma - k Lx/Ly.
-    double gamma = domain.shear_strain;
-    gamma -= std::round(gamma * L.y() / L.x()) * L.x() / L.y();
+    const double gamma = domain.reduced_strain();  // same lattice, smallest tilt
     const std::array<double, 3> width{L.x() / std::sqrt(1.0 + gamma * gamma), L.y(), L.z()};
     for (int k = 0; k < 3; ++k) g.n[k] = static_cast<int>(std::floor(width[k] / range));
     if (g.n[0] < 3 || g.n[1] < 3 || g.n[2] < 3) return false;
     cap_cells(g.n, N, 3);
     for (std::size_t i = 0; i < N; ++i) {
-      Vec3 f((x[i].x() - gamma * x[i].y()) / L.x(), x[i].y() / L.y(), x[i].z() / L.z());
+      Vec3 f = domain.fractional(x[i]);
       for (int k = 0; k < 3; ++k) f[k] -= std::floor(f[k]);
       s[i] = f;
     }
@@ -152,7 +152,7 @@ std::vector<NeighborPair> neighbor_pairs(const std::vector<Vec3>& x, const std::
   const int N = static_cast<int>(x.size());
   // Each thread collects into its own vector; the final sort makes the order thread-independent
   // (every pair's r is computed by the same expression whichever thread finds it).
-#pragma omp parallel if (N >= 4096)  // threads only pay off for many particles
+#pragma omp parallel if (N >= parallel::kNeighborParticles)
   {
     std::vector<NeighborPair> local;
 #pragma omp for schedule(static) nowait

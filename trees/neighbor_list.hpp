@@ -2,11 +2,9 @@
 // Neighbour search: every pair of spheres whose surface gap h = |r_ij| - a_i - a_j is below a
 // cut-off gap, in open space or in a periodic (optionally Lees-Edwards sheared) box.
 //
-// Geometry. A periodic box is the lattice spanned by a1 = (Lx, 0, 0), a2 = (gamma Ly, Ly, 0),
-// a3 = (0, 0, Lz) (gamma = Domain::shear_strain). Fractional coordinates s = A^{-1} x with
-// A = [a1 a2 a3] are periodic on the unit cube: s_x = (x - gamma y)/Lx, s_y = y/Ly, s_z = z/Lz.
-// The cell list bins s into n_k cells along each lattice direction with n_k = floor(w_k / R),
-// where R = cutoff_gap + 2 max(a) is the largest interaction range and w_k the distance between
+// Geometry. A periodic box is the sheared lattice of engine/core/domain.hpp. The cell list bins
+// the fractional coordinates s = Domain::fractional(x) (periodic on the unit cube) into n_k cells
+// along each lattice direction with n_k = floor(w_k / R), where R = cutoff_gap + 2 max(a) is the largest interaction range and w_k the distance between
 // lattice planes (w_x = Lx / sqrt(1 + gamma'^2) with gamma' the strain reduced to
 // |gamma' Ly| <= Lx/2, w_y = Ly, w_z = Lz). Two centres closer than R then differ by at most one
 // cell index in each direction, so the 27-cell stencil finds every pair.
@@ -18,8 +16,8 @@
 // boxes are rejected with std::invalid_argument. When a direction has fewer than 3 cells the
 // stencil would visit a cell twice; the search then falls back to the O(N^2) loop, which is exact
 // under the same contract.
-#include "engine/state.hpp"
-#include "engine/types.hpp"
+#include "engine/core/domain.hpp"
+#include "engine/core/types.hpp"
 
 #include <vector>
 

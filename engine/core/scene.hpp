@@ -2,10 +2,12 @@
 // Parameters of a scene, as plain structs with their defaults in one place. io/scene_toml.cpp maps
 // the TOML scene file one-to-one onto these; docs/scene.md documents every key with unit and
 // default. Units: lengths in the reference radius a, viscosity mu, energy kT (docs/units.md).
-#include "engine/state.hpp"
-#include "engine/types.hpp"
+#include "engine/core/domain.hpp"
+#include "engine/core/names.hpp"
+#include "engine/core/types.hpp"
 
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -46,6 +48,17 @@ struct PairForceParams {
   double hertz_stiffness = 1000.0;  // k_H [kT / a^{5/2}]
 };
 
+template <>
+struct Names<PairForceParams::Kind> {
+  static constexpr NameTable<PairForceParams::Kind, 3> table{
+      {{PairForceParams::Kind::morse, "morse"}, {PairForceParams::Kind::dlvo, "dlvo"}, {PairForceParams::Kind::hertz, "hertz"}}};
+};
+template <>
+struct Names<PairForceParams::DoubleLayer> {
+  static constexpr NameTable<PairForceParams::DoubleLayer, 2> table{
+      {{PairForceParams::DoubleLayer::hhf, "hhf"}, {PairForceParams::DoubleLayer::lsa, "lsa"}}};
+};
+
 struct ForceParams {
   std::vector<Vec3> external_force;   // one entry for all particles, or one per particle [kT/a]
   std::vector<Vec3> external_torque;  // idem [kT]
@@ -57,32 +70,53 @@ struct FlowParams {
   double rate = 0.0;  // shear or extension rate [1/time]
 };
 
+template <>
+struct Names<FlowParams::Kind> {
+  static constexpr NameTable<FlowParams::Kind, 3> table{{{FlowParams::Kind::none, "none"},
+                                                         {FlowParams::Kind::simple_shear, "simple_shear"},
+                                                         {FlowParams::Kind::planar_extension, "planar_extension"}}};
+};
+
+// Hydrodynamic level, cheapest first: free draining -> far field -> Stokesian dynamics.
 enum class HydroModel { auto_, free_draining, far_field, stokesian };
 enum class MomentChoice { auto_, F, FT, FTS };
-enum class FarFieldMethod { auto_, direct, ewald, pme, tree };
+
+template <>
+struct Names<HydroModel> {
+  static constexpr NameTable<HydroModel, 4> table{{{HydroModel::auto_, "auto"},
+                                                   {HydroModel::free_draining, "free_draining"},
+                                                   {HydroModel::far_field, "far_field"},
+                                                   {HydroModel::stokesian, "stokesian"}}};
+};
+template <>
+struct Names<MomentChoice> {
+  static constexpr NameTable<MomentChoice, 4> table{
+      {{MomentChoice::auto_, "auto"}, {MomentChoice::F, "F"}, {MomentChoice::FT, "FT"}, {MomentChoice::FTS, "FTS"}}};
+};
 
 struct HydroParams {
   HydroModel model = HydroModel::auto_;
   MomentChoice moments = MomentChoice::auto_;
-  FarFieldMethod far_field = FarFieldMethod::auto_;
+  std::string far_field = "auto";  // a registered far-field method (engine/methods.cpp) or "auto"
   double tolerance = 1e-6;  // relative accuracy of far-field products and iterative solves
   double lubrication_cutoff = 4.0;  // near field for pairs with 2r/(a_i+a_j) below this [1]
   double lubrication_min_gap = 1e-6;  // regularised minimum symmetric gap xi = 2r/(a_i+a_j) - 2 [1]
 };
 
-enum class Integrator { euler, midpoint, rkf45 };
-
 struct TimeParams {
   double dt = 1e-3;      // time step [time unit]
   std::int64_t steps = 0;
-  Integrator integrator = Integrator::euler;
+  std::string integrator = "euler";  // a registered integrator (engine/methods.cpp)
   double rkf_tolerance = 1e-6;  // local error per step for rkf45 [a]
 };
 
 struct OutputParams {
   std::int64_t every = 1;              // frames every N steps
   std::int64_t checkpoint_every = 0;   // checkpoint every N steps; 0 = at the end only
-  bool velocity = true, angular_velocity = true, force = true, torque = true, stresslet = true;
+  // Optional per-particle outputs (registered in engine/observers.cpp), sorted, no repeats. The
+  // default is the standard kinematic set; an output the resolved model does not compute (e.g.
+  // stresslet below FTS) is not written.
+  std::vector<std::string> record{"angular_velocity", "force", "stresslet", "torque", "velocity"};
   std::string xyz;                     // optional extended-XYZ export path ("" = none)
 };
 
@@ -100,6 +134,15 @@ struct Scene {
   TimeParams time;
   OutputParams output;
   std::string toml;  // the scene as resolved TOML text (stored in outputs)
+  // Line of each key in the source, "table.key" -> line (0 = unknown), so that checks made after
+  // parsing (model resolution) still name file, line and key.
+  std::map<std::string, int> lines;
+  // "file:line: [table] key" (line omitted when unknown).
+  std::string where(const std::string& table, const std::string& key) const {
+    auto it = lines.find(table + "." + key);
+    const std::string at = it != lines.end() && it->second > 0 ? ":" + std::to_string(it->second) : "";
+    return source + at + ": [" + table + "] " + key;
+  }
 };
 
 }  // namespace stokesian

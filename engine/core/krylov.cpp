@@ -1,4 +1,4 @@
-#include "engine/krylov.hpp"
+#include "engine/core/krylov.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <cmath>

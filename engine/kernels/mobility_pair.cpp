@@ -1,4 +1,4 @@
-#include "engine/mobility_pair.hpp"
+#include "engine/kernels/mobility_pair.hpp"
 
 #include <array>
 #include <cmath>
@@ -6,7 +6,6 @@
 namespace stokesian::mobility {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 // 8 pi mu Psi(r) = sum_{m=-1}^{7} q[m+1] r^m for one pair of kinds (0 = force, 1 = torque/stresslet).
 using PsiPoly = std::array<double, 9>;
@@ -269,8 +268,7 @@ MatX pair_block(const PairScalars& s, const Vec3& e, Moments m) {
     }
   if (d < 11) return B;
   // Basis tensors of the symmetric traceless space (engine/sym_traceless.hpp).
-  Mat3 basis[5];
-  for (int p = 0; p < 5; ++p) basis[p] = from_vec5(Vec5::Unit(p));
+  const auto& basis = sym_traceless_basis();
   for (int p = 0; p < 5; ++p) {
     const Mat3& P = basis[p];
     for (int k = 0; k < 3; ++k) {

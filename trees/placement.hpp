@@ -6,7 +6,7 @@
 //            differ; overlapping draws are rejected).
 // Radii: monodisperse a; bidisperse a and ratio*a with number fraction f of the large ones;
 // lognormal with median a and log standard deviation sigma.
-#include "engine/types.hpp"
+#include "engine/core/types.hpp"
 
 #include <cstdint>
 #include <string>

@@ -1,7 +1,8 @@
 #pragma once
 // Error types. ConfigError: bad scene input (names file, line, key, value, allowed range).
 // PhysicsError: a bad physical state during a run (overlap, non-convergence, NaN), naming the
-// particle and step where known. Both are reported by the CLI with a non-zero exit status.
+// particle and step where known. IoError: a file that cannot be read or written, naming the file
+// and the problem. All are reported by the CLI with distinct non-zero exit statuses.
 #include <stdexcept>
 #include <string>
 
@@ -12,6 +13,10 @@ struct ConfigError : std::runtime_error {
 };
 
 struct PhysicsError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+struct IoError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 

@@ -1,8 +1,11 @@
-#include "engine/far_field.hpp"
+#include "engine/kernels/far_field.hpp"
 
-#include "engine/mobility_pair.hpp"
+#include "engine/core/parallel.hpp"
+
+#include "engine/kernels/mobility_pair.hpp"
 
 #include <cassert>
+#include <stdexcept>
 
 namespace stokesian {
 
@@ -30,7 +33,7 @@ void mobility_product(const std::vector<Vec3>& x, const std::vector<double>& a, 
   const long n = long(x.size());
   assert(in.size() == n * d);
   out.setZero(n * d);
-#pragma omp parallel for schedule(dynamic, 16) if (n >= 256)  // below this, thread start-up costs more than it saves
+#pragma omp parallel for schedule(dynamic, 16) if (n >= parallel::kDirectProductParticles)
   for (long i = 0; i < n; ++i) {
     double* yi = out.data() + i * d;
     mobility::apply_self(a[i], mu, m, in.data() + i * d, yi);
@@ -42,6 +45,32 @@ void mobility_product(const std::vector<Vec3>& x, const std::vector<double>& a, 
       mobility::apply_pair(mobility::pair_scalars(a[i], a[j], r, mu, m), e, m, in.data() + j * d, yi);
     }
   }
+}
+
+}  // namespace stokesian
+
+namespace stokesian {
+
+void DirectFarField::set_configuration(const Configuration& c) {
+  if (c.domain.periodic()) throw std::invalid_argument("direct far field: the domain is periodic (use ewald or pme)");
+  x_ = c.x;
+  a_ = c.a;
+  have_dense_ = false;
+}
+
+const MatX* DirectFarField::dense() const {
+  if (!have_dense_) {
+    dense_ = dense_mobility(x_, a_, mu_, m_);
+    have_dense_ = true;
+  }
+  return &dense_;
+}
+
+void SelfMobility::apply(const VecX& in, VecX& out) const {
+  const int d = dof_per_particle(m_);
+  const long n = long(a_.size());
+  out.setZero(in.size());
+  for (long i = 0; i < n; ++i) mobility::apply_self(a_[std::size_t(i)], mu_, m_, in.data() + i * d, out.data() + i * d);
 }
 
 }  // namespace stokesian

@@ -6,7 +6,7 @@
 // lanczos_sqrt: y = A^{1/2} z by the Lanczos approximation of Chow & Saad (2014, SIAM J. Sci.
 //   Comput. 36, A1092, alg. 2.1): y_k = |z| V_k T_k^{1/2} e_1, stopped when successive iterates
 //   differ by less than tol relative.
-#include "engine/types.hpp"
+#include "engine/core/types.hpp"
 
 #include <functional>
 

@@ -1,7 +1,8 @@
 #pragma once
-// Basic types shared by every room of the engine.
+// Basic types shared by every layer of the engine.
 #include <Eigen/Dense>
 #include <cstddef>
+#include <random>
 #include <vector>
 
 namespace stokesian {
@@ -10,6 +11,9 @@ using Vec3 = Eigen::Vector3d;
 using Mat3 = Eigen::Matrix3d;
 using VecX = Eigen::VectorXd;
 using MatX = Eigen::MatrixXd;
+using Rng = std::mt19937_64;  // the one random-number engine (serialised in checkpoints)
+
+constexpr double kPi = 3.14159265358979323846;
 
 // Moments carried by each particle in a hydrodynamic solve (Durlofsky, Brady & Bossis 1987):
 // F = force/velocity, FT = + torque/angular velocity, FTS = + stresslet/strain rate.

@@ -3,9 +3,9 @@
 //   stokesian solve SCENE.toml --out FILE.h5 [--threads N]
 //   stokesian check SCENE.toml
 // Exit status: 0 success, 1 usage, 2 scene/config error, 3 physics error, 4 file error.
-#include "engine/errors.hpp"
+#include "engine/app/run.hpp"
+#include "engine/core/errors.hpp"
 #include "engine/simulation.hpp"
-#include "io/h5md.hpp"
 #include "io/scene_toml.hpp"
 #include "stokesian/build_info.hpp"
 
@@ -40,7 +40,7 @@ void print_check(const Simulation& sim) {
   const std::size_t n = s.positions.size();
   const auto [amin, amax] = std::minmax_element(s.radii.begin(), s.radii.end());
   double vol = 0;
-  for (double a : s.radii) vol += 4.0 / 3.0 * M_PI * a * a * a;
+  for (double a : s.radii) vol += 4.0 / 3.0 * kPi * a * a * a;
   std::printf("scene: %s\n", s.source.c_str());
   std::printf("particles: %zu (radii %.4g to %.4g a", n, *amin, *amax);
   const long nfixed = std::count(s.fixed.begin(), s.fixed.end(), 1);
@@ -103,15 +103,15 @@ int main(int argc, char** argv) {
     }
     if (!quiet) std::fprintf(stderr, "%s\n", sim.model().describe().c_str());
     if (cmd == "solve") {
-      sim.solve(out);
+      app::solve(sim, out);
       if (!quiet) std::fprintf(stderr, "wrote %s\n", out.c_str());
       return 0;
     }
-    RunOptions opt;
+    app::RunOptions opt;
     opt.out = out;
     opt.resume = resume;
     opt.quiet = quiet;
-    const long steps = sim.run(opt);
+    const long steps = app::run(sim, opt);
     if (!quiet) std::fprintf(stderr, "%ld steps, wrote %s\n", steps, out.c_str());
     return 0;
   } catch (const ConfigError& e) {
@@ -120,7 +120,7 @@ int main(int argc, char** argv) {
   } catch (const PhysicsError& e) {
     std::fprintf(stderr, "stokesian: physics error: %s\n", e.what());
     return 3;
-  } catch (const io::IoError& e) {
+  } catch (const IoError& e) {
     std::fprintf(stderr, "stokesian: file error: %s\n", e.what());
     return 4;
   } catch (const std::exception& e) {

@@ -1,4 +1,4 @@
-#include "engine/placement.hpp"
+#include "trees/placement.hpp"
 
 #include "trees/neighbor_list.hpp"
 
@@ -29,7 +29,7 @@ Placement place_particles(const PlacementParams& p, const Vec3& box_in) {
   Placement out;
   out.radius = draw_radii(p, rng);
   double vol = 0;
-  for (double a : out.radius) vol += 4.0 / 3.0 * M_PI * a * a * a;
+  for (double a : out.radius) vol += 4.0 / 3.0 * kPi * a * a * a;
   const bool periodic = box_in.minCoeff() > 0;
   Vec3 box = box_in;
   if (!periodic) box = Vec3::Constant(std::cbrt(vol / p.volume_fraction));
@@ -38,12 +38,16 @@ Placement place_particles(const PlacementParams& p, const Vec3& box_in) {
   const long n = p.count;
   out.position.assign(std::size_t(n), Vec3::Zero());
 
+  // The filled box (unsheared); open domains: no images.
+  Domain dom;
+  if (periodic) {
+    dom.kind = Domain::Kind::periodic;
+    dom.box = box;
+  }
   auto overlaps = [&](const Vec3& x, double a, long upto, const std::vector<long>& order) {
     for (long k = 0; k < upto; ++k) {
       const long j = order[std::size_t(k)];
-      Vec3 d = x - out.position[std::size_t(j)];
-      if (periodic)
-        for (int c = 0; c < 3; ++c) d[c] -= box[c] * std::round(d[c] / box[c]);
+      const Vec3 d = dom.minimum_image(x - out.position[std::size_t(j)]);
       if (d.norm() < a + out.radius[std::size_t(j)]) return true;
     }
     return false;
@@ -71,16 +75,10 @@ Placement place_particles(const PlacementParams& p, const Vec3& box_in) {
   // overlapping pair is pushed apart along its line of centres by 1.05 times its overlap, all
   // pairs at once per sweep). Works far beyond the random-sequential-addition limit (phi ~ 0.38).
   std::uniform_real_distribution<double> u(0.0, 1.0);
-  Domain dom;
-  if (periodic) {
-    dom.kind = Domain::Kind::periodic;
-    dom.box = box;
-  }
   auto clamp = [&](Vec3& x, double a) {
-    for (int c = 0; c < 3; ++c) {
-      if (periodic) x[c] -= box[c] * std::floor(x[c] / box[c]);
-      else x[c] = std::clamp(x[c], origin[c] + a, origin[c] + box[c] - a);
-    }
+    if (periodic) dom.wrap(x);
+    else
+      for (int c = 0; c < 3; ++c) x[c] = std::clamp(x[c], origin[c] + a, origin[c] + box[c] - a);
   };
   for (long i = 0; i < n; ++i) {
     Vec3 x;

@@ -6,8 +6,9 @@
 //   B4 = (xz + zx)/sqrt2, B5 = (yz + zy)/sqrt2.
 // With s_m = S:B_m and e_m = E:B_m, the pairing E:S equals e.s, so the grand mobility written in
 // these coordinates is a symmetric matrix.
-#include "engine/types.hpp"
+#include "engine/core/types.hpp"
 
+#include <array>
 #include <cmath>
 
 namespace stokesian {
@@ -33,5 +34,25 @@ inline Mat3 from_vec5(const Vec5& v) {
   A(1, 2) = A(2, 1) = r2 * v[4];
   return A;
 }
+
+// The basis tensors B_1 ... B_5 themselves (B_m = from_vec5(unit vector m)).
+inline const std::array<Mat3, 5>& sym_traceless_basis() {
+  static const std::array<Mat3, 5> basis = [] {
+    std::array<Mat3, 5> b;
+    for (int m = 0; m < 5; ++m) b[std::size_t(m)] = from_vec5(Vec5::Unit(m));
+    return b;
+  }();
+  return basis;
+}
+
+// A symmetric 3x3 tensor as its 6 independent Cartesian components xx, xy, xz, yy, yz, zz (the
+// storage of stresslets and stress tensors in output files).
+using Vec6 = Eigen::Matrix<double, 6, 1>;
+inline Vec6 six_components(const Mat3& A) {
+  Vec6 v;
+  v << A(0, 0), 0.5 * (A(0, 1) + A(1, 0)), 0.5 * (A(0, 2) + A(2, 0)), A(1, 1), 0.5 * (A(1, 2) + A(2, 1)), A(2, 2);
+  return v;
+}
+inline Vec6 six_components(const Vec5& s) { return six_components(from_vec5(s)); }
 
 }  // namespace stokesian

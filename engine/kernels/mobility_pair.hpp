@@ -28,8 +28,8 @@
 //   E  <- T : yh (e (T x e) + (T x e) e)         Omega <- S : 2 yht e x (S.e)
 //   E  <- S : xm d0 + ym d1 + zm d2 (projectors: mobility_pair.cpp)
 // All scalars are dimensional (they include 1/(8 pi mu)).
-#include "engine/sym_traceless.hpp"
-#include "engine/types.hpp"
+#include "engine/core/sym_traceless.hpp"
+#include "engine/core/types.hpp"
 
 namespace stokesian::mobility {
 

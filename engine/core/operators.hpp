@@ -1,0 +1,52 @@
+#pragma once
+// The far-field mobility as an operator: the interface every far-field method implements (direct
+// summation, Ewald, PME, and next the octree), so that solvers, the Brownian square root and the
+// conformance test see them alike.
+//
+//   y = M_inf x,  x = [F T S] per particle, y = [U Omega E] per particle (engine/core/layout.hpp),
+//
+// M_inf the grand mobility of the particles at one configuration. An operator is made once per
+// run from a MobilitySpec (the method derives its own knobs from the tolerance) and moved to each
+// new configuration with set_configuration, keeping whatever does not depend on it (parameters,
+// grids, FFT plans, trees): the plan / set points / execute lifecycle.
+#include "engine/core/domain.hpp"
+#include "engine/core/types.hpp"
+
+#include <vector>
+
+namespace stokesian {
+
+// Positions and radii of N spheres in a domain (borrowed: valid for the duration of a call).
+struct Configuration {
+  const std::vector<Vec3>& x;
+  const std::vector<double>& a;
+  const Domain& domain;
+};
+
+struct MobilitySpec {
+  Moments moments = Moments::F;
+  double viscosity = 1.0;   // mu
+  double tolerance = 1e-6;  // requested relative accuracy of products (methods with knobs)
+};
+
+class MobilityOperator {
+ public:
+  virtual ~MobilityOperator() = default;
+  virtual const char* name() const = 0;
+  virtual Moments moments() const = 0;
+  virtual Eigen::Index size() const = 0;
+  // Moves the operator to configuration c (copies what it needs; c may go away afterwards).
+  virtual void set_configuration(const Configuration& c) = 0;
+  // out = M in (out is resized). Repeatable; one product at a time per object.
+  virtual void apply(const VecX& in, VecX& out) const = 0;
+  // The dense matrix when the method has it (reference methods); nullptr otherwise.
+  virtual const MatX* dense() const { return nullptr; }
+  // Whether set_configuration for n particles runs OpenMP loops over every thread (the step's
+  // task graph then runs it alone rather than beside other phases).
+  virtual bool set_configuration_uses_threads(long n) const {
+    (void)n;
+    return false;
+  }
+};
+
+}  // namespace stokesian

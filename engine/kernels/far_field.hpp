@@ -1,0 +1,65 @@
+#pragma once
+// Far-field grand mobility M_inf of N spheres in an open domain (direct summation), and the
+// free-draining (self-only) mobility.
+//
+// M_inf is assembled from the pair blocks of engine/kernels/mobility_pair.hpp. Two implementations:
+//   dense_mobility      - the reference: the full (dN x dN) matrix from the explicit tensors;
+//   mobility_product    - matrix-free y = M x, O(N^2) work, OpenMP over the rows (each thread
+//                         owns the output rows of its particles, so there are no write conflicts
+//                         and the result does not depend on the thread count).
+// Vectors use the interleaved per-particle layout [F(3) T(3) S(5)] (engine/core/layout.hpp).
+#include "engine/core/operators.hpp"
+#include "engine/core/types.hpp"
+
+#include <vector>
+
+namespace stokesian {
+
+MatX dense_mobility(const std::vector<Vec3>& x, const std::vector<double>& a, double mu, Moments m);
+
+// y = M x (y is resized).
+void mobility_product(const std::vector<Vec3>& x, const std::vector<double>& a, double mu, Moments m,
+                      const VecX& in, VecX& out);
+
+// Direct summation, open domains. Holds its own copy of the configuration.
+class DirectFarField final : public MobilityOperator {
+ public:
+  explicit DirectFarField(const MobilitySpec& spec) : mu_(spec.viscosity), m_(spec.moments) {}
+  DirectFarField(const std::vector<Vec3>& x, const std::vector<double>& a, double mu, Moments m)
+      : x_(x), a_(a), mu_(mu), m_(m) {}
+  const char* name() const override { return "direct"; }
+  Moments moments() const override { return m_; }
+  Eigen::Index size() const override { return Eigen::Index(x_.size()) * dof_per_particle(m_); }
+  void set_configuration(const Configuration& c) override;
+  void apply(const VecX& in, VecX& out) const override { mobility_product(x_, a_, mu_, m_, in, out); }
+  const MatX* dense() const override;  // assembled on first request per configuration
+
+ private:
+  std::vector<Vec3> x_;
+  std::vector<double> a_;
+  double mu_;
+  Moments m_;
+  mutable MatX dense_;
+  mutable bool have_dense_ = false;
+};
+
+// Free draining: the self blocks only (1/(6 pi mu a) I, 1/(8 pi mu a^3) I, 3/(20 pi mu a^3) I),
+// particles see no other particle.
+class SelfMobility final : public MobilityOperator {
+ public:
+  explicit SelfMobility(const MobilitySpec& spec) : mu_(spec.viscosity), m_(spec.moments) {}
+  const char* name() const override { return "self"; }
+  Moments moments() const override { return m_; }
+  Eigen::Index size() const override { return Eigen::Index(a_.size()) * dof_per_particle(m_); }
+  void set_configuration(const Configuration& c) override { a_ = c.a; }
+  void apply(const VecX& in, VecX& out) const override;
+  const std::vector<double>& radii() const { return a_; }
+  double viscosity() const { return mu_; }
+
+ private:
+  std::vector<double> a_;
+  double mu_;
+  Moments m_;
+};
+
+}  // namespace stokesian

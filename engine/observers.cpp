@@ -1,0 +1,149 @@
+#include "engine/observers.hpp"
+
+#include "engine/core/errors.hpp"
+#include "engine/core/sym_traceless.hpp"
+#include "trees/neighbor_list.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace stokesian {
+
+namespace {
+
+// Range of the gap search [a]; min_gap reports this value when no pair is closer.
+constexpr double kGapSearchRange = 1.0;
+// Margin that keeps the search inside the minimum-image contract of trees/neighbor_list.hpp.
+constexpr double kImageMargin = 1e-9;
+
+const std::vector<std::string> kSymmetricComponents{"xx", "xy", "xz", "yy", "yz", "zz"};
+
+std::vector<double> six_per_particle(const std::vector<Vec5>& S) {
+  std::vector<double> v;
+  v.reserve(6 * S.size());
+  for (const Vec5& s : S) {
+    const Vec6 c = six_components(s);
+    v.insert(v.end(), c.data(), c.data() + 6);
+  }
+  return v;
+}
+
+Registry<ParticleOutputEntry> make_particle_outputs() {
+  Registry<ParticleOutputEntry> r("per-particle output");
+  auto always = [](const ResolvedModel&) { return true; };
+  auto rotations = [](const ResolvedModel& m) { return has_torque(m.moments); };
+  r.add({"velocity", {"velocity", {3}, {}}, always,
+         [](const State&, const Evaluation& ev, Frame& f) { f.set_particles("velocity", ev.hydro.U); }});
+  r.add({"angular_velocity", {"angular_velocity", {3}, {}}, rotations,
+         [](const State&, const Evaluation& ev, Frame& f) { f.set_particles("angular_velocity", ev.hydro.Omega); }});
+  r.add({"force", {"force", {3}, {}}, always, [](const State& s, const Evaluation& ev, Frame& f) {
+           std::vector<Vec3> F = ev.force;
+           for (std::size_t i = 0; i < s.size(); ++i)
+             if (!s.fixed.empty() && s.fixed[i]) F[i] = ev.hydro.F[i];  // holding force of fixed particles
+           f.set_particles("force", F);
+         }});
+  r.add({"torque", {"torque", {3}, {}}, rotations,
+         [](const State&, const Evaluation& ev, Frame& f) { f.set_particles("torque", ev.torque); }});
+  r.add({"stresslet", {"stresslet", {6}, kSymmetricComponents}, [](const ResolvedModel& m) { return has_stresslet(m.moments); },
+         [](const State&, const Evaluation& ev, Frame& f) {
+           f.particles["stresslet"] = Field{{6}, six_per_particle(ev.hydro.S)};
+         }});
+  return r;
+}
+
+// position and radius: every trajectory has them.
+class Positions final : public Observer {
+ public:
+  void declare(std::vector<FieldSpec>& p) const override { p.push_back({"position", {3}, {}}); }
+  void observe(const State& s, const Evaluation&, Frame& f) const override {
+    f.set_particles("position", s.position);
+    f.set_particles("radius", s.radius);
+  }
+};
+class Radius final : public Observer {  // declared last: file order position, ..., radius
+ public:
+  void declare(std::vector<FieldSpec>& p) const override { p.push_back({"radius", {}, {}}); }
+  void observe(const State&, const Evaluation&, Frame&) const override {}
+};
+
+class RecordedOutput final : public Observer {
+ public:
+  explicit RecordedOutput(const ParticleOutputEntry& e) : e_(e) {}
+  void declare(std::vector<FieldSpec>& p) const override { p.push_back(e_.spec); }
+  void observe(const State& s, const Evaluation& ev, Frame& f) const override { e_.fill(s, ev, f); }
+
+ private:
+  const ParticleOutputEntry& e_;
+};
+
+class StressletSum final : public Observer {
+ public:
+  void observe(const State&, const Evaluation& ev, Frame& f) const override {
+    Mat3 total = Mat3::Zero();
+    for (const Vec5& S : ev.hydro.S) total += from_vec5(S);
+    const Vec6 t6 = six_components(total);
+    f.observables["stresslet_sum"] = Field{{6}, std::vector<double>(t6.data(), t6.data() + 6)};
+  }
+};
+
+class Gaps final : public Observer {
+ public:
+  void observe(const State& s, const Evaluation& ev, Frame& f) const override {
+    const GapStats g = ev.gaps ? *ev.gaps : gap_statistics(s.position, s.radius, s.domain);
+    f.set_scalar("overlaps", double(g.overlaps));
+    f.set_scalar("min_gap", std::isfinite(g.min_gap) ? g.min_gap : kGapSearchRange);
+  }
+};
+
+class RunStatistics final : public Observer {
+ public:
+  void observe(const State& s, const Evaluation& ev, Frame& f) const override {
+    f.set_scalar("pair_energy", ev.pair.energy);
+    f.set_scalar("krylov_iterations", ev.hydro.iterations);
+    f.set_scalar("dt", s.dt);
+  }
+};
+
+}  // namespace
+
+const Registry<ParticleOutputEntry>& particle_outputs() {
+  static const Registry<ParticleOutputEntry> r = make_particle_outputs();
+  return r;
+}
+
+std::vector<std::unique_ptr<Observer>> make_observers(const Scene& scene, const ResolvedModel& model) {
+  std::vector<std::unique_ptr<Observer>> obs;
+  obs.push_back(std::make_unique<Positions>());
+  for (const auto& name : scene.output.record)
+    if (!particle_outputs().find(name))
+      throw ConfigError(scene.where("output", "record") + ": \"" + name + "\" is not one of " +
+                        quoted_list(particle_outputs().names()));
+  for (const auto& e : particle_outputs().entries())
+    if (std::count(scene.output.record.begin(), scene.output.record.end(), e.name) && e.available(model))
+      obs.push_back(std::make_unique<RecordedOutput>(e));
+  obs.push_back(std::make_unique<Radius>());
+  if (has_stresslet(model.moments)) obs.push_back(std::make_unique<StressletSum>());
+  obs.push_back(std::make_unique<Gaps>());
+  obs.push_back(std::make_unique<RunStatistics>());
+  return obs;
+}
+
+GapStats gap_statistics(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain) {
+  double range = kGapSearchRange;
+  if (domain.periodic()) {
+    const double amax = *std::max_element(a.begin(), a.end());
+    range = std::min(range, 0.5 * domain.box.minCoeff() - 2.0 * amax - kImageMargin);
+  }
+  const auto pairs = range >= 0 ? trees::neighbor_pairs(x, a, domain, range)
+                                : trees::neighbor_pairs_bruteforce(x, a, domain, 0.0);
+  GapStats g;
+  g.min_gap = INFINITY;
+  for (const auto& p : pairs) {
+    const double gap = p.dist - a[std::size_t(p.i)] - a[std::size_t(p.j)];
+    g.min_gap = std::min(g.min_gap, gap);
+    g.overlaps += gap < 0;
+  }
+  return g;
+}
+
+}  // namespace stokesian

@@ -1,0 +1,54 @@
+#pragma once
+// Observers: what a run records at its output steps. Each observer declares the fields it writes
+// (per-particle fields once per run, in RunHeader::particle_fields) and fills them in the Frame;
+// io/ stores every field generically (/particles/all/<name>, /observables/<name>). A new output is
+// a new observer (or a new entry of the per-particle table in observers.cpp).
+//
+// Built-in outputs:
+//   per particle: position, radius (always); velocity, angular_velocity, force, torque, stresslet
+//                 (selected by [output] record, each when the model computes it);
+//                 force of a fixed particle = the force holding it (exerted on the fluid);
+//                 stresslet as 6 Cartesian components xx xy xz yy yz zz.
+//   observables:  overlaps, min_gap (pairs closer than 1 a; NaN-free: 1.0 when no pair is that
+//                 close), pair_energy, krylov_iterations, dt, stresslet_sum (FTS: sum of the
+//                 stresslets, 6 components).
+#include "engine/core/frame.hpp"
+#include "engine/core/registry.hpp"
+#include "engine/core/scene.hpp"
+#include "engine/core/state.hpp"
+#include "engine/dynamics.hpp"
+#include "engine/model.hpp"
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace stokesian {
+
+class Observer {
+ public:
+  virtual ~Observer() = default;
+  // Per-particle fields this observer writes (appended to the run header).
+  virtual void declare(std::vector<FieldSpec>& particle_fields) const { (void)particle_fields; }
+  virtual void observe(const State& s, const Evaluation& ev, Frame& f) const = 0;
+};
+
+// The optional per-particle outputs that [output] record selects from.
+struct ParticleOutputEntry {
+  std::string name;
+  FieldSpec spec;
+  std::function<bool(const ResolvedModel&)> available;  // the model computes it
+  std::function<void(const State&, const Evaluation&, Frame&)> fill;
+};
+const Registry<ParticleOutputEntry>& particle_outputs();
+
+// The observers of a run: the always-present ones and the recorded per-particle outputs the model
+// computes. Throws ConfigError naming [output] record for an unknown name.
+std::vector<std::unique_ptr<Observer>> make_observers(const Scene& scene, const ResolvedModel& model);
+
+// Surface-gap statistics over pairs closer than 1 a (reduced in small periodic boxes to what the
+// minimum image allows).
+GapStats gap_statistics(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain);
+
+}  // namespace stokesian

@@ -1,0 +1,134 @@
+// Runs started by stokesian 0.1.0 (tests/data/legacy, written at commit c015545) continue with this
+// engine: the trajectory and checkpoint of the old release are accepted (their model is identified
+// by the structured lines of its stored description, not by its prose), and the completed run
+// ends where the old engine's uninterrupted run ended.
+#include <doctest/doctest.h>
+
+#include "engine/core/output.hpp"
+#include "io/checkpoint.hpp"
+#include "io/h5md.hpp"
+
+#include <hdf5.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <unistd.h>
+#include <vector>
+
+namespace fs = std::filesystem;
+using namespace stokesian;
+
+namespace {
+
+const fs::path kData = fs::path(STOKESIAN_SOURCE_DIR) / "tests" / "data" / "legacy";
+
+std::vector<double> read_doubles(const std::string& file, const std::string& dset) {
+  const hid_t f = H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  REQUIRE(f >= 0);
+  const hid_t d = H5Dopen2(f, dset.c_str(), H5P_DEFAULT);
+  REQUIRE(d >= 0);
+  const hid_t sp = H5Dget_space(d);
+  std::vector<double> v(std::size_t(H5Sget_simple_extent_npoints(sp)));
+  H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data());
+  H5Sclose(sp);
+  H5Dclose(d);
+  H5Fclose(f);
+  return v;
+}
+
+// A scratch copy of one legacy run: scene, trajectory and checkpoint.
+fs::path copy_run(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("stokesian_legacy_" + std::to_string(getpid()) + "_" + name);
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  for (const char* ext : {".toml", ".h5", ".h5.ckpt"}) fs::copy_file(kData / (name + ext), dir / (name + ext));
+  return dir;
+}
+
+int run_cli(const fs::path& dir, const std::string& name, const std::string& scene) {
+  const std::string cmd = std::string(STOKESIAN_BINARY) + " run " + (dir / scene).string() + " --out " +
+                          (dir / (name + ".h5")).string() + " --resume --quiet --threads 2 2> " +
+                          (dir / "err.txt").string();
+  return WEXITSTATUS(std::system(cmd.c_str()));
+}
+
+std::string read_text(const fs::path& p) {
+  std::ifstream in(p);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+}  // namespace
+
+TEST_CASE("a 0.1.0 trajectory and checkpoint resume and finish where the old engine finished") {
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  for (const std::string name : {"legacy_sd", "legacy_sheared"}) {
+    CAPTURE(name);
+    const fs::path dir = copy_run(name);
+    const auto before = io::inspect_trajectory((dir / (name + ".h5")).string());
+    CHECK(before.last_step == 6);
+    CHECK(!ModelKey::parse(before.model_key).empty());  // read from the old description
+
+    REQUIRE(run_cli(dir, name, name + ".toml") == 0);
+    const std::string traj = (dir / (name + ".h5")).string();
+    const auto after = io::inspect_trajectory(traj);
+    CHECK(after.frames == 7);
+    CHECK(after.last_step == 12);
+
+    // Final frame against the old engine's uninterrupted run (17 significant digits stored). The
+    // arithmetic is the same, so on one machine the results agree to the last bit; across machines
+    // libm may round differently, hence the 1e-12 relative bound.
+    std::istringstream expected(read_text(kData / (name + ".expected.txt")));
+    std::string header;
+    std::getline(expected, header);
+    const auto x = read_doubles(traj, "/particles/all/position/value");
+    const auto u = read_doubles(traj, "/particles/all/velocity/value");
+    const std::size_t n = after.particles, last = (std::size_t(after.frames) - 1) * n * 3;
+    double err = 0.0, scale = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+      double ref[6];
+      for (double& r : ref) expected >> r;
+      for (int c = 0; c < 3; ++c) {
+        err = std::max(err, std::abs(x[last + 3 * i + std::size_t(c)] - ref[c]));
+        err = std::max(err, std::abs(u[last + 3 * i + std::size_t(c)] - ref[3 + c]));
+        scale = std::max({scale, std::abs(ref[c]), std::abs(ref[3 + c])});
+      }
+    }
+    CHECK(expected.good());
+    CHECK(err <= 1e-12 * scale);
+    fs::remove_all(dir);
+  }
+}
+
+TEST_CASE("a 0.1.0 run is still recognised by what it is: another scene or model is refused") {
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  const std::string name = "legacy_sd";
+  const fs::path dir = copy_run(name);
+  // A different time step: the scene differs.
+  {
+    std::string scene = read_text(dir / (name + ".toml"));
+    scene.replace(scene.find("dt = 0.05"), 9, "dt = 0.04");
+    std::ofstream(dir / "other_dt.toml") << scene;
+  }
+  CHECK(run_cli(dir, name, "other_dt.toml") == 4);
+  CHECK(read_text(dir / "err.txt").find("scene differs") != std::string::npos);
+  // The same scene resolved to another model (as a later engine might): the model key differs.
+  {
+    const auto info = io::inspect_trajectory((dir / (name + ".h5")).string());
+    RunHeader h;
+    h.particles = info.particles;
+    h.particle_fields = info.particle_fields;
+    h.scene_toml = info.scene_toml;
+    h.model_key = "hydrodynamics=far_field;solver=mobility_cg;moments=FT;far_field=direct;brownian=no";
+    io::Checkpoint restored;
+    CHECK_THROWS_WITH_AS(io::RunOutput::resume((dir / (name + ".h5")).string(), h, restored),
+                         doctest::Contains("the model differs"), IoError);
+    h.model_key = info.model_key;  // the key read from the 0.1.0 description
+    CHECK(h.model_key == "hydrodynamics=stokesian;solver=dense_sd;moments=FT;far_field=direct;brownian=no");
+  }
+  // Nothing was changed by the refusals: the original scene still resumes.
+  CHECK(run_cli(dir, name, name + ".toml") == 0);
+  fs::remove_all(dir);
+}
