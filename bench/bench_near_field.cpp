@@ -6,7 +6,7 @@
 // Phases: "neighbors" (cell-list search), "assembly" (R_nf over pairs with s < 4), "analyze_factor"
 // (first factorisation: ordering + symbolic + numeric), "refactor" (numeric only, pattern reused),
 // "solve". The factorised matrix is R_nf + R_self, R_self the block-diagonal single-sphere
-// resistance (the near-field part of the seed's preconditioner, seed 1 eq. 2.46). Fill = nnz(L).
+// resistance (the near-field part of the preconditioner of [L24] eq. 2.46). Fill = nnz(L).
 //   bench_near_field [--quick] [--out DIR]
 #include "bench/harness.hpp"
 #include "trees/placement.hpp"

@@ -7,13 +7,13 @@
 namespace stokesian {
 
 Hydrodynamics::Hydrodynamics(const ResolvedModel& model, double viscosity, const AmbientFlow& flow, double tolerance,
-                             double lubrication_cutoff, double lubrication_min_gap)
+                             lubrication::NearFieldParams near_field)
     : model_(model), flow_(flow) {
   const SolverEntry* solver = hydro_solvers().find(solver_of(model_));
   if (!solver) throw std::invalid_argument("Hydrodynamics: no solver \"" + solver_of(model_) + "\"");
   SolverSetup setup;
   setup.spec = MobilitySpec{model_.moments, viscosity, tolerance};
-  setup.near_field = lubrication::NearFieldParams{lubrication_cutoff, lubrication_min_gap};
+  setup.near_field = near_field;
   if (solver->needs_far_field) {
     const FarFieldMethodEntry* ff = far_field_methods().find(model_.far_field);
     if (!ff) throw std::invalid_argument("Hydrodynamics: no far-field method \"" + model_.far_field + "\"");

@@ -5,6 +5,7 @@
 #include "engine/core/flow.hpp"
 #include "engine/hydro_solver.hpp"
 #include "engine/model.hpp"
+#include "lubrication/near_field.hpp"
 
 #include <memory>
 #include <vector>
@@ -14,7 +15,7 @@ namespace stokesian {
 class Hydrodynamics {
  public:
   Hydrodynamics(const ResolvedModel& model, double viscosity, const AmbientFlow& flow, double tolerance,
-                double lubrication_cutoff = 4.0, double lubrication_min_gap = 1e-6);
+                lubrication::NearFieldParams near_field = {});
 
   // Set-up at a configuration; skipped when it equals the last prepared one.
   void prepare(const Configuration& c);

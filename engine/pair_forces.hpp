@@ -3,27 +3,27 @@
 //
 // Every law is a pair energy U(r; a_i, a_j) of the centre distance r = |r_ij|, r_ij = x_i - x_j
 // (minimum image), with surface gap h = r - a_i - a_j. The force on i is
-//   F_i = -dU/dr r_ij / r,   F_j = -F_i                                   (seed 1 eq. 2.18)
-// (thesis eq. 2.6 writes the same sum with n_ab pointing from a to b, i.e. with the opposite sign;
-// method.md s.8). The pair virial sum is W = sum_pairs r_ij (x) F_i.
+//   F_i = -dU/dr r_ij / r,   F_j = -F_i                                   ([L24] eq. 2.18)
+// ([T] eq. 2.6 writes the same sum with n_ab pointing from a to b, i.e. with the opposite sign).
+// The pair virial sum is W = sum_pairs r_ij (x) F_i. References [L24], [T]: README.md.
 //
 // Laws (a_eff = a_i a_j / (a_i + a_j)):
-//  Morse (seed 1 eq. 2.17): U = -V0 [2 e^{-kappa h} - e^{-2 kappa h}], for all h; minimum -V0 at
-//    h = 0 and the same expression repels overlapping spheres (seed 1 after eq. 2.18).
-//  DLVO (thesis s.2.2.2; s.5.2.2 refers back to it): U = U_vdW + U_dl + U_Born with
+//  Morse ([L24] eq. 2.17): U = -V0 [2 e^{-kappa h} - e^{-2 kappa h}], for all h; minimum -V0 at
+//    h = 0 and the same expression repels overlapping spheres ([L24] after eq. 2.18).
+//  DLVO ([T] s.2.2.2; s.5.2.2 refers back to it): U = U_vdW + U_dl + U_Born with
 //    U_vdW = -(A/6) [2 a_i a_j/(r^2 - (a_i+a_j)^2) + 2 a_i a_j/(r^2 - (a_i-a_j)^2)
 //                    + ln((r^2 - (a_i+a_j)^2)/(r^2 - (a_i-a_j)^2))]        (Hamaker 1937)
 //      dU_vdW/dr = 32 A a_i^3 a_j^3 r / (3 P^2 M^2), P = r^2 - (a_i+a_j)^2, M = r^2 - (a_i-a_j)^2,
 //      and with t = 4 a_i a_j / M the bracket equals sum_{k>=3} (k-2)/(2k) t^k, summed for small t
 //      where the closed form cancels. Limits: -A a_eff/(6h) as h -> 0, -16 A a_i^3 a_j^3/(9 r^6).
 //    U_dl (Hogg, Healy & Fuerstenau 1966, constant potential, Debye-Hueckel) with equal surface
-//      potentials psi_0 on both spheres; the thesis' bracket then reduces to 2 ln(1 + e^{-kappa h}):
+//      potentials psi_0 on both spheres; the bracket of [T] then reduces to 2 ln(1 + e^{-kappa h}):
 //      U_dl = pi eps a_eff 2 psi0^2 * 2 ln(1 + e^{-kappa h}) = 2 Z a_eff ln(1 + e^{-kappa h}),
 //      Z = 2 pi eps psi0^2 (PairForceParams::surface_potential, kT/a).
 //    or, for kappa a > 10, the linear superposition form (Bell, Levine & McCartney 1970):
 //      U_dl = 64 pi eps (kT/e)^2 tanh^2(e psi0/4kT) (a_i a_j / r) e^{-kappa h}
 //           = 2 Z g (a_i a_j / r) e^{-kappa h},  g = [tanh(psi~/4)/(psi~/4)]^2, psi~ = e psi0/kT.
-//    U_Born (Feke et al. 1984 as quoted in thesis s.2.2.2, n = 12), R = r/a_i, lambda = a_j/a_i,
+//    U_Born (Feke et al. 1984 as quoted in [T] s.2.2.2, n = 12), R = r/a_i, lambda = a_j/a_i,
 //      s = sigma/a_i:  U_Born = A s^6/37800 * (1/R) * sum_{k=1..4} N_k(R)/D_k^7 with
 //        D1 = R-1+lambda, N1 = -R^2 - 7(lambda-1)R - 6(lambda^2-7lambda+1)
 //        D2 = R+1-lambda, N2 = -R^2 + 7(lambda-1)R - 6(lambda^2-7lambda+1)
@@ -33,7 +33,7 @@
 //    Gap floor: for h < h_min (PairForceParams::min_gap) the DLVO sum is continued linearly,
 //      U(h) = U(h_min) + U'(h_min)(h - h_min): the force stays finite and continuous (constant
 //      below h_min) and remains the exact derivative of the energy. Overlap needs a Hertz law as
-//      well (thesis eq. 2.7 pairs DLVO with Hertz contact in the same way).
+//      well ([T] eq. 2.7 pairs DLVO with Hertz contact in the same way).
 //  Hertz: U = (2/5) k_H delta^{5/2}, dU/dr = -k_H delta^{3/2}, delta = a_i + a_j - r > 0, else 0.
 //
 // Cut-off (cut and shift): U_c(r) = U(r) - U(a_i + a_j + h_c) for h < h_c, 0 beyond; the force is

@@ -2,7 +2,7 @@
 // Ewald splitting of the generating function Psi of the far-field grand mobility.
 //
 // Every pair block derives from one radial function with Fourier transform
-//     Psi^(k) = -g_alpha(k a_alpha) g_beta(k a_beta) / (mu k^4)       (engine/mobility_pair.hpp).
+//     Psi^(k) = -g_alpha(k a_alpha) g_beta(k a_beta) / (mu k^4)       (engine/kernels/mobility_pair.hpp).
 // For separated spheres only the truncated Faxen factors matter: g -> P(k) = 1 - w a^2 k^2 with
 // w = 1/6 (force kind) or 1/10 (torque/stresslet kind), so the pair polynomial is
 //     P_alpha P_beta = 1 - c1 k^2 + c2 k^4,   c1 = w_a a_a^2 + w_b a_b^2,  c2 = w_a a_a^2 w_b a_b^2.

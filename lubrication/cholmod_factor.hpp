@@ -7,8 +7,8 @@
 //                  R is unchanged; numeric factorisation every call.
 //   solve(b)       x = R^{-1} b.
 //   multiply_L(w)  psi = P^T L w, whose covariance for standard normal w is P^T L L^T P = R: the
-//                  near-field Brownian force of shared/notes/method.md s.5.
-// A matrix that is not positive definite raises NotPositiveDefinite (engine/errors.hpp) with the
+//                  near-field Brownian force (Banchio & Brady 2003, eq. 2.11; docs/stokesian_dynamics.md).
+// A matrix that is not positive definite raises NotPositiveDefinite (engine/core/errors.hpp) with the
 // failing column; NearField::factorize translates it into the particle and its closest pair.
 #include "engine/core/types.hpp"
 

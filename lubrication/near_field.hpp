@@ -1,18 +1,19 @@
 #pragma once
-// Near-field (lubrication) resistance of Stokesian dynamics (shared/notes/method.md s.3):
+// Near-field (lubrication) resistance of Stokesian dynamics (docs/stokesian_dynamics.md):
 //
 //     R_nf = sum over pairs with s < s_cut of  [ R2B_exact(pair) - R2B_inf(pair) ],
 //
 // R2B_exact: the exact two-sphere resistance at the solve's moment level (F, FT or the full FTS
 //   matrix of lubrication/resistance_functions.hpp; F and FT are principal sub-blocks of FTS,
 //   since with E_inf = 0 the stresslet does not enter the force/torque rows);
-// R2B_inf: the inverse of the engine's own two-body far-field mobility (engine/far_field.hpp) at
+// R2B_inf: the inverse of the engine's own two-body far-field mobility (engine/kernels/far_field.hpp) at
 //   the same level, so that for two particles R_inf^{-1} + R_nf = R2B_exact exactly.
 // s = 2 r / (a_i + a_j) is the symmetric separation, xi = s - 2 the symmetric gap (the same for
 // both spheres, so the pair block obeys Newton's third law and the lambda <-> 1/lambda relations).
 // Pairs with xi < xi_min are evaluated at xi_min along their line of centres (regularised
 // minimum gap) and counted; overlaps (xi < 0) are counted separately.
 #include "engine/core/domain.hpp"
+#include "engine/core/scene.hpp"
 #include "engine/core/types.hpp"
 #include "lubrication/cholmod_factor.hpp"
 #include "lubrication/resistance_table.hpp"
@@ -22,8 +23,8 @@
 namespace stokesian::lubrication {
 
 struct NearFieldParams {
-  double cutoff = 4.0;   // pairs with 2 r / (a_i + a_j) < cutoff (4 = "4 mean radii") [1]
-  double min_gap = 1e-6; // regularised minimum symmetric gap xi_min [1]
+  double cutoff = kDefaultLubricationCutoff;   // pairs with 2 r / (a_i + a_j) < cutoff [1]
+  double min_gap = kDefaultLubricationMinGap;  // regularised minimum symmetric gap xi_min [1]
 };
 
 struct NearFieldStats {

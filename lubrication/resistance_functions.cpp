@@ -35,7 +35,7 @@
 //    is the Hurwitz-zeta form of T23 eqs. 26-27.
 // 5. Pair matrix: tensor forms of the A, B, C (JO84) and G, H, M (J92) blocks, with the M
 //    basis d0 = 3/2 (dd - I/3)(dd - I/3), d1, d2 of J92 (also Kim & Karrila 1991, ch. 11),
-//    projected on the orthonormal symmetric-traceless basis of engine/sym_traceless.hpp.
+//    projected on the orthonormal symmetric-traceless basis of engine/core/sym_traceless.hpp.
 
 #include "lubrication/resistance_functions.hpp"
 

@@ -143,7 +143,7 @@ ResistanceScalars resistance_scalars_22_21(double s, double lambda);
 /// Dense FTS resistance matrix of an isolated pair, 22 x 22, in the engine's interleaved layout
 /// [F1(3) T1(3) S1(5) F2(3) T2(3) S2(5)] = R [U1 Om1 e1 U2 Om2 e2], where U_a, Om_a are the
 /// particle velocities relative to the ambient flow at the particle and e_a are the 5
-/// coordinates of -E_inf in the orthonormal basis of engine/sym_traceless.hpp (so for a
+/// coordinates of -E_inf in the orthonormal basis of engine/core/sym_traceless.hpp (so for a
 /// uniform ambient strain both e columns carry the same -E_inf).  F, T, S are exerted by the
 /// particles on the fluid.  Blocks: A, Bt, Gt / B, C, Ht / G, H, M of JO84/J92 with the
 /// normalisations above; R is symmetric and positive definite.

@@ -127,7 +127,7 @@ TEST_CASE("split: real + wave = free kernel; series and closed form join continu
 // Layer 2: the Ewald reference.
 
 TEST_CASE("Ewald: single sphere in a cubic box matches Hasimoto (1959)") {
-  // (1/6 pi mu a)(1 - 2.837297 a/L + (4 pi/3)(a/L)^3) (method.md s.4). The constant is given to 7
+  // (1/6 pi mu a)(1 - 2.837297 a/L + (4 pi/3)(a/L)^3) (docs/ewald.md). The constant is given to 7
   // digits (error < 5e-7 a/L) and the RPY lattice sum has further terms beyond (a/L)^3 (measured
   // ~(a/L)^6 scale); 2e-6 relative for a/L <= 0.2.
   const double mu = 1.0, a = 1.0;

@@ -19,9 +19,8 @@ constexpr double pi = 3.14159265358979323846;
 // Relative difference with a floor: |x - y| / max(|y|, floor).
 double rel(double x, double y, double floor = 1e-300) { return std::abs(x - y) / std::max(std::abs(y), floor); }
 
-// Polydisperse far-field scalars in the thesis' normalisation (times 6 pi mu), eqs. (3.30)-(3.40)
-// of the thesis in shared/seeds/003, with the corrections of shared/notes/method.md s.2: + sign of
-// z^m; (3.35)-(3.36) are x^g, y^g. "src" is the particle carrying F/T/S, "res" the responding one.
+// Polydisperse far-field scalars in the normalisation of the thesis [T] (times 6 pi mu), its eqs.
+// (3.30)-(3.40), with the corrections of docs/mobility.md: + sign of z^m; (3.35)-(3.36) are x^g, y^g. "src" is the particle carrying F/T/S, "res" the responding one.
 struct Thesis {
   double xa, ya, yb, xc, yc, xg, yg, yh, xm, ym, zm;
 };

@@ -14,7 +14,7 @@
 using namespace stokesian;
 
 namespace {
-// Hasimoto (1959) for the RPY sphere in a simple cubic lattice of side L (method.md s.4).
+// Hasimoto (1959) for the RPY sphere in a simple cubic lattice of side L (docs/ewald.md).
 double hasimoto(double a, double L, double mu) {
   return (1.0 - 2.837297 * a / L + 4.0 * M_PI / 3.0 * std::pow(a / L, 3)) / (6.0 * M_PI * mu * a);
 }

@@ -1,5 +1,5 @@
 // Regression: eight spheres at the corners of a cube settling under equal forces perform the
-// periodic motion of Durlofsky, Brady & Bossis (1987, s.4): the thesis (shared/seeds/003, table 2.1)
+// periodic motion of Durlofsky, Brady & Bossis (1987, s.4): the thesis [T] (README.md; table 2.1)
 // reports the period t_per in units of a/U0, U0 = F/(6 pi mu a), for the far-field FT mobility
 // problem (St = 0): FT 31.9 (edge 3), 61.9 (edge 4) with one process and 32.7, 59.7 with eight;
 // FTS (rigid-particle stresslets) 39.9 (edge 3, one process), 39.0 (eight). One period

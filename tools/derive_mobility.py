@@ -12,7 +12,7 @@ finite-part integrals
     int_0^inf sin(ck)/k^(2m+1) dk = (-1)^m pi sgn(c) c^(2m) / (2 (2m)!)
 gives Phi exactly, as a piecewise polynomial in r divided by r, in the three regimes
 r >= a+b (separate), |a-b| <= r <= a+b (overlapping), r <= |a-b| (one sphere inside the other).
-This script prints those forms; engine/mobility_pair.cpp implements them. Run: python3 tools/derive_mobility.py
+This script prints those forms; engine/kernels/mobility_pair.cpp implements them. Run: python3 tools/derive_mobility.py
 """
 import sympy as sp
 

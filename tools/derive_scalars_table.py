@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Tables for engine/mobility_pair.cpp.
+"""Tables for engine/kernels/mobility_pair.cpp.
 
 (1) C[s][m]: the pair-mobility scalar s (formulas of tools/derive_scalars.py) for Psi = r^m equals
     C[s][m] * r^(m - k_s) (k_s = 2 for a, 3 for b and g, 4 for c, h and m), m = -1..7; summing monomials avoids cancellation between derivatives.

@@ -25,11 +25,11 @@ struct PairForceParams {
   enum class Kind { morse, dlvo, hertz } kind = Kind::morse;
   double cutoff = 0.0;  // surface-gap cutoff h = r - a_i - a_j beyond which the force is zero [a]; 0 = law's default
                         // (energy shifted to vanish there; default from forces::default_cutoff)
-  // Morse (seed 1 eq. 2.17): phi = -V0 [2 exp(-kappa h) - exp(-2 kappa h)]
+  // Morse (Lee et al. 2024 [L24] eq. 2.17): phi = -V0 [2 exp(-kappa h) - exp(-2 kappa h)]
   double morse_depth = 1.0;   // V0 [kT-units energy]
   double morse_kappa = 5.0;   // kappa [1/a]
-  // DLVO (thesis s.2.2.2): Hamaker vdW + constant-potential double layer + Born repulsion.
-  // Alumina in water (thesis s.5.3.2: A = 4.76e-20 J, eps_r = 81, T = 298 K, 7 mM, |psi0| = 37 mV,
+  // DLVO ([T] s.2.2.2): Hamaker vdW + constant-potential double layer + Born repulsion.
+  // Alumina in water ([T] s.5.3.2: A = 4.76e-20 J, eps_r = 81, T = 298 K, 7 mM, |psi0| = 37 mV,
   // sigma = 7 A) for spheres of physical radius a_phys, with kT = 4.1143e-21 J:
   //   hamaker = A/kT = 11.569;  debye_kappa = a_phys / 3.6925 nm (kappa^2 = 2 N_A e^2 I/(eps kT));
   //   surface_potential = 2 pi eps_r eps_0 psi0^2 a_phys / kT = 1.4994e9 m^-1 * a_phys;
@@ -44,7 +44,7 @@ struct PairForceParams {
   DoubleLayer double_layer = DoubleLayer::hhf;  // hhf = Hogg-Healy-Fuerstenau; lsa = linear superposition (Bell et al. 1970), kappa a > 10
   double surface_potential_reduced = 0.0;       // e psi0/kT, only for the lsa tanh(e psi0/4kT) saturation; 0 = linearised [1]
   // Hertz contact: U = (2/5) k_H delta^{5/2}, F = k_H delta^{3/2} along the line of centres for
-  // overlap delta = a_i + a_j - r > 0 (thesis eq. 2.7 writes k' delta^{2.5}: k' = (2/5) k_H).
+  // overlap delta = a_i + a_j - r > 0 ([T] eq. 2.7 writes k' delta^{2.5}: k' = (2/5) k_H). [L24], [T]: README.md.
   double hertz_stiffness = 1000.0;  // k_H [kT / a^{5/2}]
 };
 
@@ -94,13 +94,17 @@ struct Names<MomentChoice> {
       {{MomentChoice::auto_, "auto"}, {MomentChoice::F, "F"}, {MomentChoice::FT, "FT"}, {MomentChoice::FTS, "FTS"}}};
 };
 
+// Near field: pairs with 2r/(a_i+a_j) below the cutoff get lubrication; gaps are floored at the
+// minimum symmetric gap (lubrication/near_field.hpp uses the same defaults).
+constexpr double kDefaultLubricationCutoff = 4.0, kDefaultLubricationMinGap = 1e-6;
+
 struct HydroParams {
   HydroModel model = HydroModel::auto_;
   MomentChoice moments = MomentChoice::auto_;
   std::string far_field = "auto";  // a registered far-field method (engine/methods.cpp) or "auto"
   double tolerance = 1e-6;  // relative accuracy of far-field products and iterative solves
-  double lubrication_cutoff = 4.0;  // near field for pairs with 2r/(a_i+a_j) below this [1]
-  double lubrication_min_gap = 1e-6;  // regularised minimum symmetric gap xi = 2r/(a_i+a_j) - 2 [1]
+  double lubrication_cutoff = kDefaultLubricationCutoff;   // near field for pairs with 2r/(a_i+a_j) below this [1]
+  double lubrication_min_gap = kDefaultLubricationMinGap;  // regularised minimum symmetric gap xi = 2r/(a_i+a_j) - 2 [1]
 };
 
 struct TimeParams {

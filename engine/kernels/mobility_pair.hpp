@@ -15,8 +15,8 @@
 // The whole matrix is then a Gram matrix in k-space, hence symmetric positive definite for every
 // configuration, and it reduces to the polydisperse RPY/Durlofsky form for r >= a_alpha + a_beta,
 // where 8 pi mu Psi = r + c / r with c = 2 (w_alpha a_alpha^2 + w_beta a_beta^2),
-// w = 1/6 for force and 1/10 for torque/stresslet. That is the thesis' eqs. (3.30)-(3.40) with the
-// corrections of shared/notes/method.md s.2 (1/8 Laplacian weight, + sign of z^m).
+// w = 1/6 for force and 1/10 for torque/stresslet. That is eqs. (3.30)-(3.40) of the thesis [T]
+// (README.md) with two misprints corrected (docs/mobility.md: 1/8 Laplacian weight, + sign of z^m).
 // For overlapping (|a-b| < r < a+b) and nested (r <= |a-b|) pairs 8 pi mu Psi r is a polynomial
 // in r (tools/derive_scalars_table.py).
 //
