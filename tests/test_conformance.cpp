@@ -23,6 +23,8 @@
 //   exactly when a near-field resistance enters.
 #include <doctest/doctest.h>
 
+#include "support/random.hpp"
+
 #include "engine/core/sym_traceless.hpp"
 #include "engine/hydro_solver.hpp"
 #include "engine/kernels/far_field.hpp"
@@ -37,6 +39,7 @@
 #include <vector>
 
 using namespace stokesian;
+using stokesian::test::random_vector;
 
 namespace {
 
@@ -71,13 +74,6 @@ std::vector<Config> operator_configs() {
           random_config("sheared", 10, Vec3(12, 10, 11), 0.4, 1.2, 7, true, 0.37)};
 }
 
-VecX random_vector(Eigen::Index n, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> g;
-  VecX v(n);
-  for (auto& x : v) x = g(rng);
-  return v;
-}
 
 MatX reference_mobility(const Config& c, Moments m, double mu) {
   return c.domain.periodic() ? ewald::ewald_mobility(c.x, c.a, mu, m, c.domain) : dense_mobility(c.x, c.a, mu, m);

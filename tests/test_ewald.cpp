@@ -6,6 +6,8 @@
 // y = M x on random Gaussian x (fixed seeds).
 #include <doctest/doctest.h>
 
+#include "support/random.hpp"
+
 #include "engine/kernels/far_field.hpp"
 #include "engine/kernels/mobility_pair.hpp"
 #include "ewald/ewald_reference.hpp"
@@ -21,6 +23,7 @@
 #include <random>
 
 using namespace stokesian;
+using stokesian::test::random_vector;
 using mobility::PairScalars;
 
 namespace {
@@ -54,13 +57,6 @@ Config random_config(int n, const Vec3& L, double amin, double amax, std::uint64
   return c;
 }
 
-VecX random_vector(Eigen::Index n, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> g;
-  VecX v(n);
-  for (auto& e : v) e = g(rng);
-  return v;
-}
 
 std::vector<double> as_list(const PairScalars& s) {
   return {s.xa, s.ya, s.yb, s.ybt, s.xc, s.yc, s.xg, s.yg, s.xgt, s.ygt, s.yh, s.yht, s.xm, s.ym, s.zm};

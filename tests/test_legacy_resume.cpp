@@ -10,6 +10,8 @@
 
 #include <hdf5.h>
 
+#include "support/hdf5_read.hpp"
+
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -21,23 +23,12 @@
 namespace fs = std::filesystem;
 using namespace stokesian;
 
+using stokesian::test::read_doubles;
+
 namespace {
 
 const fs::path kData = fs::path(STOKESIAN_SOURCE_DIR) / "tests" / "data" / "legacy";
 
-std::vector<double> read_doubles(const std::string& file, const std::string& dset) {
-  const hid_t f = H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
-  REQUIRE(f >= 0);
-  const hid_t d = H5Dopen2(f, dset.c_str(), H5P_DEFAULT);
-  REQUIRE(d >= 0);
-  const hid_t sp = H5Dget_space(d);
-  std::vector<double> v(std::size_t(H5Sget_simple_extent_npoints(sp)));
-  H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data());
-  H5Sclose(sp);
-  H5Dclose(d);
-  H5Fclose(f);
-  return v;
-}
 
 // A scratch copy of one legacy run: scene, trajectory and checkpoint.
 fs::path copy_run(const std::string& name) {

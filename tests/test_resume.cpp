@@ -7,6 +7,8 @@
 #include "io/h5md.hpp"
 
 #include <hdf5.h>
+
+#include "support/hdf5_read.hpp"
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -20,6 +22,8 @@
 #include <vector>
 
 namespace fs = std::filesystem;
+
+using stokesian::test::read_doubles;
 
 namespace {
 
@@ -46,19 +50,6 @@ int run_cli(const std::string& scene, const std::string& out, bool resume, int k
   return WEXITSTATUS(status);
 }
 
-std::vector<double> read_doubles(const std::string& file, const std::string& dset) {
-  const hid_t f = H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
-  REQUIRE(f >= 0);
-  const hid_t d = H5Dopen2(f, dset.c_str(), H5P_DEFAULT);
-  REQUIRE(d >= 0);
-  const hid_t sp = H5Dget_space(d);
-  std::vector<double> v(std::size_t(H5Sget_simple_extent_npoints(sp)));
-  H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data());
-  H5Sclose(sp);
-  H5Dclose(d);
-  H5Fclose(f);
-  return v;
-}
 
 void check_kill_resume(const std::string& scene_text, const std::vector<std::string>& datasets, std::uint64_t seed) {
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);

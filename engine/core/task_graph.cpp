@@ -63,6 +63,7 @@ void TaskGraph::run(Mode mode) {
     std::exception_ptr error;  // exceptions must not leave a task: the first is rethrown after the wave
     std::vector<char> token_store(std::size_t(n), 0);
     char* token = token_store.data();
+    (void)token;  // used only in the depend clauses
 #pragma omp parallel
 #pragma omp single
     for (int k : wave) {
