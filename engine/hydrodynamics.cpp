@@ -23,15 +23,10 @@ Hydrodynamics::Hydrodynamics(const ResolvedModel& model, double viscosity, const
 }
 
 void Hydrodynamics::prepare(const Configuration& c) {
-  if (prepared_ && c.x == x_ && c.a == a_ && c.domain.kind == domain_.kind && c.domain.box == domain_.box &&
-      c.domain.shear_strain == domain_.shear_strain)
-    return;
-  prepared_ = false;
+  if (prepared_.same_as(c)) return;
+  prepared_.valid = false;
   solver_->prepare(c);
-  x_ = c.x;
-  a_ = c.a;
-  domain_ = c.domain;
-  prepared_ = true;
+  prepared_.store(c);
 }
 
 HydroResult Hydrodynamics::solve(const Configuration& c, const std::vector<char>& fixed, const std::vector<Vec3>& F,

@@ -38,11 +38,7 @@ class Hydrodynamics {
   ResolvedModel model_;
   AmbientFlow flow_;
   std::unique_ptr<HydroSolver> solver_;
-  // The last prepared configuration.
-  std::vector<Vec3> x_;
-  std::vector<double> a_;
-  Domain domain_;
-  bool prepared_ = false;
+  StoredConfiguration prepared_;  // the last prepared configuration
 };
 
 }  // namespace stokesian

@@ -51,19 +51,17 @@ Registry<ParticleOutputEntry> make_particle_outputs() {
   return r;
 }
 
-// position and radius: every trajectory has them.
+// position and radius: every trajectory has them (position first: it is the file's clock).
 class Positions final : public Observer {
  public:
-  void declare(std::vector<FieldSpec>& p) const override { p.push_back({"position", {3}, {}}); }
+  void declare(std::vector<FieldSpec>& p) const override {
+    p.push_back({"position", {3}, {}});
+    p.push_back({"radius", {}, {}});
+  }
   void observe(const State& s, const Evaluation&, Frame& f) const override {
     f.set_particles("position", s.position);
     f.set_particles("radius", s.radius);
   }
-};
-class Radius final : public Observer {  // declared last: file order position, ..., radius
- public:
-  void declare(std::vector<FieldSpec>& p) const override { p.push_back({"radius", {}, {}}); }
-  void observe(const State&, const Evaluation&, Frame&) const override {}
 };
 
 class RecordedOutput final : public Observer {
@@ -121,7 +119,6 @@ std::vector<std::unique_ptr<Observer>> make_observers(const Scene& scene, const 
   for (const auto& e : particle_outputs().entries())
     if (std::count(scene.output.record.begin(), scene.output.record.end(), e.name) && e.available(model))
       obs.push_back(std::make_unique<RecordedOutput>(e));
-  obs.push_back(std::make_unique<Radius>());
   if (has_stresslet(model.moments)) obs.push_back(std::make_unique<StressletSum>());
   obs.push_back(std::make_unique<Gaps>());
   obs.push_back(std::make_unique<RunStatistics>());

@@ -17,11 +17,11 @@ DenseStokesianDynamics::DenseStokesianDynamics(Moments m, double mu, const Ambie
     : m_(m), mu_(mu), flow_(flow), reference_(true), near_(m, mu, p) {}
 
 void DenseStokesianDynamics::select_reference_operator(const Domain& domain) {
+  if (op_ && op_periodic_ == domain.periodic()) return;
   const MobilitySpec spec{m_, mu_, 0.0};
-  if (domain.periodic() && !dynamic_cast<ewald::EwaldFarField*>(op_.get()))
-    op_ = std::make_unique<ewald::EwaldFarField>(spec);
-  else if (!domain.periodic() && !dynamic_cast<DirectFarField*>(op_.get()))
-    op_ = std::make_unique<DirectFarField>(spec);
+  if (domain.periodic()) op_ = std::make_unique<ewald::EwaldFarField>(spec);
+  else op_ = std::make_unique<DirectFarField>(spec);
+  op_periodic_ = domain.periodic();
 }
 
 void DenseStokesianDynamics::prepare(const Configuration& c) {

@@ -54,10 +54,11 @@ class DenseStokesianDynamics final : public HydroSolver {
 
  private:
   void select_reference_operator(const Domain& domain);
+  bool op_periodic_ = false;  // reference use: the domain kind op_ was made for
   Moments m_;
   double mu_;
   AmbientFlow flow_;         // reference use only
-  bool reference_ = false;   // operator chosen per domain (reference constructor)
+  bool reference_ = false;   // operator chosen per domain kind (reference constructor)
   std::unique_ptr<MobilityOperator> op_;
   lubrication::NearField near_;
   MatX R_;

@@ -92,14 +92,9 @@ MatX ewald_mobility(const std::vector<Vec3>& x, const std::vector<double>& a, do
 }
 
 void EwaldFarField::set_configuration(const Configuration& c) {
-  if (built_ && x_ == c.x && a_ == c.a && domain_.kind == c.domain.kind && domain_.box == c.domain.box &&
-      domain_.shear_strain == c.domain.shear_strain)
-    return;
+  if (built_.same_as(c)) return;
   M_ = ewald_mobility(c.x, c.a, mu_, m_, c.domain, opt_);
-  x_ = c.x;
-  a_ = c.a;
-  domain_ = c.domain;
-  built_ = true;
+  built_.store(c);
 }
 
 }  // namespace stokesian::ewald

@@ -53,10 +53,7 @@ class EwaldFarField final : public MobilityOperator {
   double mu_;
   Moments m_;
   EwaldReferenceOptions opt_;
-  std::vector<Vec3> x_;
-  std::vector<double> a_;
-  Domain domain_;
-  bool built_ = false;
+  StoredConfiguration built_;  // the configuration M_ belongs to
   MatX M_;
 };
 

@@ -42,8 +42,7 @@ PmeFarField::PmeFarField(const std::vector<Vec3>& x, const std::vector<double>& 
 
 void PmeFarField::set_configuration(const Configuration& c) {
   // Same particles, radii, box and strain: keep parameters, grid and FFTW plans.
-  if (fft_ && radius_ == c.a && domain_.box == c.domain.box && domain_.shear_strain == c.domain.shear_strain &&
-      domain_.kind == c.domain.kind)
+  if (fft_ && radius_ == c.a && domain_ == c.domain)
     update_positions(c.x);
   else
     build(c.x, c.a, c.domain);

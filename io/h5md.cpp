@@ -781,8 +781,7 @@ void Trajectory::check_frame(const Frame& f) const {
   if (any_step_ && f.step <= last_step_)
     throw IoError(path_ + ": frame step " + std::to_string(f.step) + " does not follow step " + std::to_string(last_step_));
   for (const auto& [name, field] : f.observables) {
-    const FieldSpec spec{name, field.shape, {}};
-    if (field.values.empty() || field.values.size() != static_cast<std::size_t>(spec.item_size()))
+    if (field.values.empty() || field.values.size() != static_cast<std::size_t>(item_size(field.shape)))
       throw IoError(path_ + ": observable " + name + " has " + std::to_string(field.values.size()) +
                     " values for its shape");
   }

@@ -84,11 +84,8 @@ class Reader {
     if (!n) return def;
     auto s = n->value_exact<std::string>();
     if (!s) fail(n, where(table, key), "expected a string, got " + type_name(*n));
-    if (std::find(allowed.begin(), allowed.end(), *s) == allowed.end()) {
-      std::string list;
-      for (const auto& a : allowed) list += (list.empty() ? "\"" : ", \"") + a + "\"";
-      fail(n, where(table, key), "\"" + *s + "\" is not one of " + list);
-    }
+    if (std::find(allowed.begin(), allowed.end(), *s) == allowed.end())
+      fail(n, where(table, key), "\"" + *s + "\" is not one of " + quoted_list(allowed));
     return *s;
   }
 

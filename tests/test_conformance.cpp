@@ -205,24 +205,25 @@ Reference solve_reference(const MatX& R, const MatX& Minv, Moments m, const Conf
   return r;
 }
 
-// The reference resistance of a level: M_ref^{-1} (free draining: the analytic self blocks), plus
-// the near field at the Stokesian-dynamics level.
-MatX reference_resistance(HydroModel level, const Config& c, Moments m, double mu, MatX& Minv) {
+// The reference mobility of a level: the analytic self blocks (free draining) or M_ref.
+MatX level_mobility(HydroModel level, const Config& c, Moments m, double mu) {
+  if (level != HydroModel::free_draining) return reference_mobility(c, m, mu);
   const int d = dof_per_particle(m);
   const long n = long(c.x.size());
-  MatX M;
-  if (level == HydroModel::free_draining) {
-    M = MatX::Zero(n * d, n * d);
-    for (long i = 0; i < n; ++i) {
-      const double a = c.a[std::size_t(i)];
-      for (int k = 0; k < d; ++k)
-        M(i * d + k, i * d + k) = k < 3 ? 1.0 / (6 * kPi * mu * a) : k < 6 ? 1.0 / (8 * kPi * mu * a * a * a)
-                                                                          : 3.0 / (20 * kPi * mu * a * a * a);
-    }
-  } else {
-    M = reference_mobility(c, m, mu);
+  MatX M = MatX::Zero(n * d, n * d);
+  for (long i = 0; i < n; ++i) {
+    const double a = c.a[std::size_t(i)];
+    for (int k = 0; k < d; ++k)
+      M(i * d + k, i * d + k) = k < 3 ? 1.0 / (6 * kPi * mu * a) : k < 6 ? 1.0 / (8 * kPi * mu * a * a * a)
+                                                                        : 3.0 / (20 * kPi * mu * a * a * a);
   }
-  Minv = M.inverse();
+  return M;
+}
+
+// The reference resistance of a level: M^{-1} (returned in Minv), plus the near field at the
+// Stokesian-dynamics level.
+MatX reference_resistance(HydroModel level, const Config& c, Moments m, double mu, MatX& Minv) {
+  Minv = level_mobility(level, c, m, mu).inverse();
   MatX R = Minv;
   if (level == HydroModel::stokesian) {
     lubrication::NearField nf(m, mu);
@@ -353,9 +354,7 @@ TEST_CASE("every solver that samples Brownian motion: displacements of covarianc
       if (solver.needs_far_field) setup.far_field = far_field_methods().find("direct")->make(setup.spec);
       auto s = solver.make(std::move(setup));
       s->prepare({c.x, c.a, c.domain});
-      MatX Minv;
-      const MatX R = reference_resistance(solver.level, c, m, mu, Minv);
-      const MatX M = Minv.inverse();
+      const MatX M = level_mobility(solver.level, c, m, mu);
       const int d = dof_per_particle(m);
       MatX Mtt(9, 9);
       for (int i = 0; i < 3; ++i)

@@ -35,6 +35,9 @@ struct Domain {
   Mat3 lattice() const;
   // Fractional coordinates s (not wrapped) of the header formula, at the reduced strain.
   Vec3 fractional(const Vec3& x) const;
+  // Same kind, box and strain (the strain as stored, not reduced).
+  bool operator==(const Domain& o) const { return kind == o.kind && box == o.box && shear_strain == o.shear_strain; }
+  bool operator!=(const Domain& o) const { return !(*this == o); }
 };
 
 template <>

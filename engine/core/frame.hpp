@@ -13,15 +13,18 @@
 
 namespace stokesian {
 
+// Number of values in one item of this shape (1 for a scalar).
+inline int item_size(const std::vector<int>& shape) {
+  int k = 1;
+  for (int s : shape) k *= s;
+  return k;
+}
+
 struct FieldSpec {
   std::string name;                     // /particles/all/<name> or /observables/<name>
   std::vector<int> shape;               // of one item: {} scalar, {3}, {6}, {3, 3} ...
   std::vector<std::string> components;  // optional labels of the last axis (H5MD attribute)
-  int item_size() const {
-    int k = 1;
-    for (int s : shape) k *= s;
-    return k;
-  }
+  int item_size() const { return stokesian::item_size(shape); }
 };
 
 struct Field {

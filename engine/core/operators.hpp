@@ -23,6 +23,22 @@ struct Configuration {
   const Domain& domain;
 };
 
+// An owned copy of a configuration, for objects that keep work between calls and must know
+// whether a new configuration is the one they already hold.
+struct StoredConfiguration {
+  std::vector<Vec3> x;
+  std::vector<double> a;
+  Domain domain;
+  bool valid = false;
+  bool same_as(const Configuration& c) const { return valid && x == c.x && a == c.a && domain == c.domain; }
+  void store(const Configuration& c) {
+    x = c.x;
+    a = c.a;
+    domain = c.domain;
+    valid = true;
+  }
+};
+
 struct MobilitySpec {
   Moments moments = Moments::F;
   double viscosity = 1.0;   // mu
