@@ -7,6 +7,7 @@
 #include "engine/core/output.hpp"
 #include "io/checkpoint.hpp"
 #include "io/h5md.hpp"
+#include "io/scene_toml.hpp"
 
 #include <hdf5.h>
 
@@ -122,4 +123,33 @@ TEST_CASE("a 0.1.0 run is still recognised by what it is: another scene or model
   // Nothing was changed by the refusals: the original scene still resumes.
   CHECK(run_cli(dir, name, name + ".toml") == 0);
   fs::remove_all(dir);
+}
+
+TEST_CASE("the model key reads 0.1.0 descriptions by their structured lines, not their reasons") {
+  // The description stored by 0.1.0 in tests/data/legacy/legacy_sd.h5.
+  const std::string old = io::inspect_trajectory((kData / "legacy_sd.h5").string()).model;
+  const ModelKey key = ModelKey::from_legacy_description(old);
+  CHECK(key.text() == "hydrodynamics=stokesian;solver=dense_sd;moments=FT;far_field=direct;brownian=no");
+  // Reworded reasons (the lines after the choices) leave the key unchanged.
+  const std::string reworded = old.substr(0, old.find("\n  - ")) + "\n  - a different explanation\n  - another one";
+  CHECK(ModelKey::from_legacy_description(reworded) == key);
+  // A different choice changes it.
+  std::string other = old;
+  other.replace(other.find("moments: FT"), 11, "moments: FTS");
+  CHECK(ModelKey::from_legacy_description(other) != key);
+  // Text without the structured lines has no key; a key's own text reads back as itself.
+  CHECK(ModelKey::from_legacy_description("stokesian FTS, far field direct").empty());
+  CHECK(ModelKey::from_stored(key.text()) == key);
+}
+
+TEST_CASE("a run's scene is recognised through formatting, key order and comments, not through a changed value") {
+  const std::string stored = io::inspect_trajectory((kData / "legacy_sd.h5").string()).scene_toml;
+  // The same scene written by hand: other order, comments, defaults left out.
+  const std::string by_hand = read_text(kData / "legacy_sd.toml");
+  CHECK(by_hand != stored);
+  CHECK(io::same_scene(stored, by_hand));
+  std::string changed = by_hand;
+  changed.replace(changed.find("dt = 0.05"), 9, "dt = 0.04");
+  CHECK(!io::same_scene(stored, changed));
+  CHECK(!io::same_scene(stored, "not = [toml"));
 }
