@@ -32,21 +32,21 @@ Registry<ParticleOutputEntry> make_particle_outputs() {
   Registry<ParticleOutputEntry> r("per-particle output");
   auto always = [](const ResolvedModel&) { return true; };
   auto rotations = [](const ResolvedModel& m) { return has_torque(m.moments); };
-  r.add({"velocity", {"velocity", {3}, {}}, always,
+  r.add({"velocity", {"velocity", {3}, {}, units::velocity}, always,
          [](const State&, const Evaluation& ev, Frame& f) { f.set_particles("velocity", ev.hydro.U); }});
-  r.add({"angular_velocity", {"angular_velocity", {3}, {}}, rotations,
+  r.add({"angular_velocity", {"angular_velocity", {3}, {}, units::angular_velocity}, rotations,
          [](const State&, const Evaluation& ev, Frame& f) { f.set_particles("angular_velocity", ev.hydro.Omega); }});
-  r.add({"force", {"force", {3}, {}}, always, [](const State& s, const Evaluation& ev, Frame& f) {
+  r.add({"force", {"force", {3}, {}, units::force}, always, [](const State& s, const Evaluation& ev, Frame& f) {
            std::vector<Vec3> F = ev.force;
            for (std::size_t i = 0; i < s.size(); ++i)
              if (!s.fixed.empty() && s.fixed[i]) F[i] = ev.hydro.F[i];  // holding force of fixed particles
            f.set_particles("force", F);
          }});
-  r.add({"torque", {"torque", {3}, {}}, rotations,
+  r.add({"torque", {"torque", {3}, {}, units::energy}, rotations,
          [](const State&, const Evaluation& ev, Frame& f) { f.set_particles("torque", ev.torque); }});
-  r.add({"stresslet", {"stresslet", {6}, kSymmetricComponents}, [](const ResolvedModel& m) { return has_stresslet(m.moments); },
+  r.add({"stresslet", {"stresslet", {6}, kSymmetricComponents, units::energy}, [](const ResolvedModel& m) { return has_stresslet(m.moments); },
          [](const State&, const Evaluation& ev, Frame& f) {
-           f.particles["stresslet"] = Field{{6}, six_per_particle(ev.hydro.S)};
+           f.particles["stresslet"] = Field{{6}, six_per_particle(ev.hydro.S), units::energy, false};
          }});
   return r;
 }
@@ -55,12 +55,25 @@ Registry<ParticleOutputEntry> make_particle_outputs() {
 class Positions final : public Observer {
  public:
   void declare(std::vector<FieldSpec>& p) const override {
-    p.push_back({"position", {3}, {}});
-    p.push_back({"radius", {}, {}});
+    p.push_back({"position", {3}, {}, units::length});
+    p.push_back({"radius", {}, {}, units::length});
   }
   void observe(const State& s, const Evaluation&, Frame& f) const override {
     f.set_particles("position", s.position);
     f.set_particles("radius", s.radius);
+  }
+};
+
+// Periodic boxes: image counts (engine/core/state.hpp), so that position + image . edges is the
+// unwrapped position (H5MD's `image` element).
+class Images final : public Observer {
+ public:
+  void declare(std::vector<FieldSpec>& p) const override { p.push_back({"image", {3}, {}, "", true}); }
+  void observe(const State& s, const Evaluation&, Frame& f) const override {
+    Field& out = f.particles["image"];
+    out = Field{{3}, std::vector<double>(3 * s.size(), 0.0), "", true};
+    for (std::size_t i = 0; i < s.image.size(); ++i)
+      for (int c = 0; c < 3; ++c) out.values[3 * i + std::size_t(c)] = s.image[i][std::size_t(c)];
   }
 };
 
@@ -80,7 +93,7 @@ class StressletSum final : public Observer {
     Mat3 total = Mat3::Zero();
     for (const Vec5& S : ev.hydro.S) total += from_vec5(S);
     const Vec6 t6 = six_components(total);
-    f.observables["stresslet_sum"] = Field{{6}, std::vector<double>(t6.data(), t6.data() + 6)};
+    f.observables["stresslet_sum"] = Field{{6}, std::vector<double>(t6.data(), t6.data() + 6), units::energy, false};
   }
 };
 
@@ -88,17 +101,17 @@ class Gaps final : public Observer {
  public:
   void observe(const State& s, const Evaluation& ev, Frame& f) const override {
     const GapStats g = ev.gaps ? *ev.gaps : gap_statistics(s.position, s.radius, s.domain);
-    f.set_scalar("overlaps", double(g.overlaps));
-    f.set_scalar("min_gap", std::isfinite(g.min_gap) ? g.min_gap : kGapSearchRange);
+    f.set_count("overlaps", std::int64_t(g.overlaps));
+    f.set_scalar("min_gap", std::isfinite(g.min_gap) ? g.min_gap : kGapSearchRange, units::length);
   }
 };
 
 class RunStatistics final : public Observer {
  public:
   void observe(const State& s, const Evaluation& ev, Frame& f) const override {
-    f.set_scalar("pair_energy", ev.pair.energy);
-    f.set_scalar("krylov_iterations", ev.hydro.iterations);
-    f.set_scalar("dt", s.dt);
+    f.set_scalar("pair_energy", ev.pair.energy, units::energy);
+    f.set_count("krylov_iterations", std::int64_t(ev.hydro.iterations));
+    f.set_scalar("dt", s.dt, units::time);
   }
 };
 
@@ -112,6 +125,7 @@ const Registry<ParticleOutputEntry>& particle_outputs() {
 std::vector<std::unique_ptr<Observer>> make_observers(const Scene& scene, const ResolvedModel& model) {
   std::vector<std::unique_ptr<Observer>> obs;
   obs.push_back(std::make_unique<Positions>());
+  if (scene.domain.periodic()) obs.push_back(std::make_unique<Images>());
   for (const auto& name : scene.output.record)
     if (!particle_outputs().find(name))
       throw ConfigError(scene.where("output", "record") + ": \"" + name + "\" is not one of " +

@@ -5,12 +5,13 @@
 // a new observer (or a new entry of the per-particle table in observers.cpp).
 //
 // Built-in outputs:
-//   per particle: position, radius (always); velocity, angular_velocity, force, torque, stresslet
+//   per particle: position, radius (always); image (periodic boxes: lattice vectors removed by
+//                 wrapping, integers); velocity, angular_velocity, force, torque, stresslet
 //                 (selected by [output] record, each when the model computes it);
 //                 force of a fixed particle = the force holding it (exerted on the fluid);
 //                 stresslet as 6 Cartesian components xx xy xz yy yz zz.
-//   observables:  overlaps, min_gap (pairs closer than 1 a; NaN-free: 1.0 when no pair is that
-//                 close), pair_energy, krylov_iterations, dt, stresslet_sum (FTS: sum of the
+//   observables:  overlaps (integer), min_gap (pairs closer than 1 a; NaN-free: 1.0 when no pair is that
+//                 close), pair_energy, krylov_iterations (integer), dt, stresslet_sum (FTS: sum of the
 //                 stresslets, 6 components).
 #include "engine/core/frame.hpp"
 #include "engine/core/registry.hpp"

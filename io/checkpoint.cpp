@@ -74,14 +74,15 @@ struct Reader {
   }
 };
 
-constexpr std::uint64_t kFormatVersion = 1;
+// 1: stokesian 0.1.0 (no image counts); 2: image counts after the fixed flags.
+constexpr std::uint64_t kFormatVersion = 2;
 
 }  // namespace
 
 void write_checkpoint(const std::string& path, const Checkpoint& c) {
   const State& s = c.state;
-  if (s.radius.size() != s.size() || s.fixed.size() != s.size())
-    throw IoError(path + ": state has inconsistent sizes (positions, radii, fixed flags)");
+  if (s.radius.size() != s.size() || s.fixed.size() != s.size() || (!s.image.empty() && s.image.size() != s.size()))
+    throw IoError(path + ": state has inconsistent sizes (positions, radii, fixed flags, images)");
   Writer w;
   w.u64(kFormatVersion);
   w.i64(s.step);
@@ -95,6 +96,9 @@ void write_checkpoint(const std::string& path, const Checkpoint& c) {
     for (int k = 0; k < 3; ++k) w.f64(x[k]);
   for (double r : s.radius) w.f64(r);
   for (char f : s.fixed) w.out.push_back(f ? 1 : 0);
+  w.u64(s.image.size());
+  for (const auto& n : s.image)
+    for (int k = 0; k < 3; ++k) w.i64(n[std::size_t(k)]);
   w.str(s.rng_state);
   w.str(c.scene_toml);
   w.str(c.model);
@@ -144,7 +148,10 @@ Checkpoint read_checkpoint(const std::string& path) {
   if (tail.u64() != fnv1a64(payload)) throw IoError(path + ": checkpoint checksum mismatch (corrupt)");
 
   Reader r{payload, 0, path};
-  if (r.u64() != kFormatVersion) throw IoError(path + ": unsupported checkpoint format version");
+  const std::uint64_t version = r.u64();
+  if (version < 1 || version > kFormatVersion)
+    throw IoError(path + ": unsupported checkpoint format version " + std::to_string(version) + " (this build reads 1 to " +
+                  std::to_string(kFormatVersion) + ")");
   Checkpoint c;
   State& s = c.state;
   s.step = r.i64();
@@ -163,6 +170,14 @@ Checkpoint read_checkpoint(const std::string& path) {
   s.fixed.assign(payload.begin() + static_cast<std::ptrdiff_t>(r.pos),
                  payload.begin() + static_cast<std::ptrdiff_t>(r.pos + n));
   r.pos += n;
+  if (version >= 2) {
+    const std::size_t m = r.count(3 * 8);
+    if (m != 0 && m != n) throw IoError(path + ": checkpoint holds image counts for " + std::to_string(m) + " of " +
+                                        std::to_string(n) + " particles (corrupt)");
+    s.image.resize(m);
+    for (auto& im : s.image)
+      for (int k = 0; k < 3; ++k) im[std::size_t(k)] = static_cast<std::int32_t>(r.i64());
+  }
   s.rng_state = r.str();
   c.scene_toml = r.str();
   c.model = r.str();
@@ -177,6 +192,12 @@ Checkpoint read_checkpoint(const std::string& path) {
   }
   if (r.pos != payload.size()) throw IoError(path + ": checkpoint has trailing bytes (corrupt)");
   return c;
+}
+
+std::string join_differences(const std::vector<std::string>& diff) {
+  std::string out;
+  for (std::size_t i = 0; i < diff.size(); ++i) out += (i ? "; " : "") + diff[i];
+  return out;
 }
 
 RunOutput RunOutput::start(const std::string& path, const RunHeader& header) {
@@ -195,7 +216,9 @@ RunOutput RunOutput::resume(const std::string& path, const RunHeader& header, Ch
   if (c.state.size() != header.particles)
     refuse("the checkpoint holds " + std::to_string(c.state.size()) + " particles, the run has " +
            std::to_string(header.particles));
-  if (!same_scene(c.scene_toml, header.scene_toml)) refuse("the scene differs from the one the checkpoint was written with");
+  if (const auto diff = scene_differences(c.scene_toml, header.scene_toml); !diff.empty())
+    refuse("the scene differs from the one the checkpoint was written with (checkpoint -> this scene): " +
+           join_differences(diff));
   const ModelKey stored = ModelKey::from_stored(c.model), run = ModelKey::from_stored(header.model_key);
   if (stored != run || (stored.empty() && c.model != header.model))
     refuse("the model differs (checkpoint: \"" + (stored.empty() ? c.model : stored.text()) + "\", run: \"" +

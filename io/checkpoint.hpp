@@ -17,6 +17,7 @@
 #include <cstdint>
 #include <map>
 #include <string>
+#include <vector>
 
 namespace stokesian::io {
 
@@ -31,6 +32,9 @@ struct Checkpoint {
 
 void write_checkpoint(const std::string& path, const Checkpoint& c);  // atomic replace
 Checkpoint read_checkpoint(const std::string& path);                  // IoError if damaged
+
+// "a; b; c" of scene_differences() entries, for resume messages.
+std::string join_differences(const std::vector<std::string>& diff);
 
 inline std::string checkpoint_path(const std::string& trajectory_path) { return trajectory_path + ".ckpt"; }
 

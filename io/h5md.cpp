@@ -341,7 +341,7 @@ std::vector<T> read_vector(hid_t loc, const std::string& name, hid_t memtype, co
 // `clock`: an existing element whose step/time this one shares through hard links (H5MD allows
 // this for elements sampled together, and requires it for a time-dependent box).
 void make_element(hid_t loc, const std::string& name, const std::vector<hsize_t>& item, hid_t clock,
-                  const std::string& file) {
+                  const std::string& file, const std::string& unit = "", bool integer = false) {
   H g = make_group(loc, name, file);
   // Chunks of at most about 256 KiB (so the default 1 MiB chunk cache holds several and reading
   // one frame stays cheap) and at most 128 frames (so small systems do not allocate large, mostly
@@ -361,18 +361,38 @@ void make_element(hid_t loc, const std::string& name, const std::vector<hsize_t>
     checked(H5Pset_chunk(dcpl, static_cast<int>(chunk.size()), chunk.data()), file, "chunking of " + name);
     H d = checked(H5Dcreate2(g, dname, type, space, H5P_DEFAULT, dcpl, H5P_DEFAULT), H5Dclose, file,
                   "cannot create dataset " + name + "/" + dname);
+    return d;
   };
   if (clock >= 0) {
     checked(H5Lcreate_hard(clock, "step", g, "step", H5P_DEFAULT, H5P_DEFAULT), file, "cannot link " + name + "/step");
     checked(H5Lcreate_hard(clock, "time", g, "time", H5P_DEFAULT, H5P_DEFAULT), file, "cannot link " + name + "/time");
   } else {
     extensible("step", H5T_STD_I64LE, {0}, 128);
-    extensible("time", H5T_IEEE_F64LE, {0}, 128);
+    H t = extensible("time", H5T_IEEE_F64LE, {0}, 128);
+    write_attr_strings(t, "unit", {units::time}, true, file);
   }
   std::vector<hsize_t> shape{0};
   shape.insert(shape.end(), item.begin(), item.end());
-  extensible("value", H5T_IEEE_F64LE, shape, chunk_frames);
+  H v = extensible("value", integer ? H5T_STD_I64LE : H5T_IEEE_F64LE, shape, chunk_frames);
+  if (!unit.empty()) write_attr_strings(v, "unit", {unit}, true, file);
 }
+
+// Field values as the dataset's memory type: integer fields as int64 (exact for the counts and
+// image indices they hold), others as double. HDF5 converts to the file's type (files of 0.1.0
+// store counts as double).
+struct Rows {
+  std::vector<double> real;
+  std::vector<std::int64_t> whole;
+  bool integer = false;
+  void add(const std::vector<double>& v) {
+    if (integer)
+      for (double x : v) whole.push_back(static_cast<std::int64_t>(std::llround(x)));
+    else
+      real.insert(real.end(), v.begin(), v.end());
+  }
+  hid_t memtype() const { return integer ? H5T_NATIVE_INT64 : H5T_NATIVE_DOUBLE; }
+  const void* data() const { return integer ? static_cast<const void*>(whole.data()) : real.data(); }
+};
 
 // Append k rows (each of the dataset's item shape) to an extensible dataset.
 void append_rows(hid_t loc, const std::string& name, hid_t memtype, const void* data, hsize_t k, const std::string& file) {
@@ -414,6 +434,10 @@ void write_layout(const std::string& path, const RunHeader& h) {
     H creator = make_group(g, "creator", path);
     write_attr_strings(creator, "name", {"stokesian"}, true, path);
     write_attr_strings(creator, "version", {build::version}, true, path);
+    // H5MD units module: the unit attributes below use the reduced units of docs/units.md.
+    H um = make_group(g, "modules/units", path);
+    write_attr_ints(um, "version", {1, 0}, false, path);
+    write_attr_strings(um, "system", {"reduced: a (reference radius), mu (viscosity), kT (thermal energy)"}, true, path);
   }
   {
     H all = make_group(f, "particles/all", path);
@@ -422,10 +446,10 @@ void write_layout(const std::string& path, const RunHeader& h) {
       std::vector<hsize_t> item{n};
       for (hsize_t d : item_dims(spec.shape)) item.push_back(d);
       if (spec.name == "position") {
-        make_element(all, "position", item, -1, path);
+        make_element(all, "position", item, -1, path, spec.unit, spec.integer);
       } else {
         H clock = open_group(all, "position", path);
-        make_element(all, spec.name, item, clock, path);
+        make_element(all, spec.name, item, clock, path, spec.unit, spec.integer);
       }
       if (!spec.components.empty()) {
         H g = open_group(all, spec.name, path);
@@ -437,18 +461,12 @@ void write_layout(const std::string& path, const RunHeader& h) {
     write_attr_ints(box, "dimension", {3}, true, path);
     const std::string b = boundary_name(h.domain);
     write_attr_strings(box, "boundary", {b, b, b}, false, path);
-    if (h.domain.periodic() && !h.sheared_box) {
-      const hsize_t three = 3;
-      H space = checked(H5Screate_simple(1, &three, nullptr), H5Sclose, path, "dataspace");
-      H d = checked(H5Dcreate2(box, "edges", H5T_IEEE_F64LE, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose,
-                    path, "cannot create box/edges");
-      checked(H5Dwrite(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, h.domain.box.data()), path,
-              "cannot write box/edges");
-    } else if (h.domain.periodic()) {
-      // Lees-Edwards: triclinic box whose rows are the edge vectors a = (Lx,0,0),
-      // b = (strain Ly, Ly, 0), c = (0,0,Lz), one matrix per frame.
+    if (h.domain.periodic()) {
+      // One matrix per frame whose rows are the edge vectors a = (Lx,0,0), b = (strain Ly, Ly, 0),
+      // c = (0,0,Lz): Lees-Edwards boxes change every frame, and readers (MDAnalysis) expect a
+      // time-dependent triclinic box. Files of 0.1.0 hold a fixed [3] dataset for unsheared boxes.
       H clock = open_group(all, "position", path);
-      make_element(box, "edges", {3, 3}, clock, path);
+      make_element(box, "edges", {3, 3}, clock, path, units::length);
     }
   }
   H obs = make_group(f, "observables", path);
@@ -474,7 +492,7 @@ std::int64_t frames_in(hid_t file, const std::string& path) {
 // Append frames to an open trajectory file; the caller guarantees their order and shapes.
 void append_frames(hid_t file, const std::string& path, const RunHeader& h, const std::vector<const Frame*>& fr) {
   if (fr.empty()) return;
-  const hsize_t k = fr.size(), n = h.particles;
+  const hsize_t k = fr.size();
   H all = open_group(file, "particles/all", path);
   const hsize_t f0 = static_cast<hsize_t>(frames_in(file, path));
   for (const FieldSpec& spec : h.particle_fields) {
@@ -492,21 +510,19 @@ void append_frames(hid_t file, const std::string& path, const RunHeader& h, cons
   append_rows(all, "position/time", H5T_NATIVE_DOUBLE, times.data(), k, path);
   std::vector<double> buf;
   for (const FieldSpec& spec : h.particle_fields) {
-    const hsize_t per = n * static_cast<hsize_t>(spec.item_size());
-    buf.assign(k * per, 0.0);
-    for (hsize_t j = 0; j < k; ++j) {
-      const auto& v = fr[j]->particles.at(spec.name).values;
-      std::copy(v.begin(), v.end(), buf.begin() + static_cast<std::ptrdiff_t>(j * per));
-    }
-    append_rows(all, spec.name + "/value", H5T_NATIVE_DOUBLE, buf.data(), k, path);
+    Rows rows;
+    rows.integer = spec.integer;
+    for (hsize_t j = 0; j < k; ++j) rows.add(fr[j]->particles.at(spec.name).values);
+    append_rows(all, spec.name + "/value", rows.memtype(), rows.data(), k, path);
   }
-  if (h.domain.periodic() && h.sheared_box) {
+  if (h.domain.periodic() && has_link(all, "box/edges/value")) {
     buf.assign(k * 9, 0.0);
     const Vec3& L = h.domain.box;
     for (hsize_t j = 0; j < k; ++j) {
       double* m = buf.data() + 9 * j;
       m[0] = L.x();
-      m[3] = fr[j]->shear_strain * L.y();
+      // An unsheared box keeps the scene's strain (frames of such runs carry the same value).
+      m[3] = (h.sheared_box ? fr[j]->shear_strain : h.domain.shear_strain) * L.y();
       m[4] = L.y();
       m[8] = L.z();
     }
@@ -514,14 +530,15 @@ void append_frames(hid_t file, const std::string& path, const RunHeader& h, cons
   }
 
   // Observables: each has its own clock, since not every frame needs to carry every observable.
-  std::map<std::string, std::vector<int>> names;  // name -> item shape
+  std::map<std::string, const Field*> names;  // name -> its first field (shape, unit, kind)
   for (const Frame* f : fr)
-    for (const auto& [name, field] : f->observables) names.emplace(name, field.shape);
+    for (const auto& [name, field] : f->observables) names.emplace(name, &field);
   H obs = open_group(file, "observables", path);
-  for (const auto& [name, shape] : names) {
+  for (const auto& [name, first] : names) {
+    const std::vector<int>& shape = first->shape;
     const std::vector<hsize_t> item = item_dims(shape);
     if (!has_link(obs, name)) {
-      make_element(obs, name, item, -1, path);
+      make_element(obs, name, item, -1, path, first->unit, first->integer);
     } else {
       H d = open_dataset(obs, name + "/value", path);
       const auto dims = dims_of(d, path);
@@ -529,18 +546,21 @@ void append_frames(hid_t file, const std::string& path, const RunHeader& h, cons
         throw IoError(path + ": observable " + name + " changes shape");
     }
     std::vector<std::int64_t> st;
-    std::vector<double> tm, val;
+    std::vector<double> tm;
+    Rows val;
+    val.integer = first->integer;
     for (const Frame* f : fr) {
       auto it = f->observables.find(name);
       if (it == f->observables.end()) continue;
-      if (it->second.shape != shape) throw IoError(path + ": observable " + name + " changes shape");
-      val.insert(val.end(), it->second.values.begin(), it->second.values.end());
+      if (it->second.shape != shape || it->second.integer != first->integer)
+        throw IoError(path + ": observable " + name + " changes shape or kind");
+      val.add(it->second.values);
       st.push_back(f->step);
       tm.push_back(f->time);
     }
     append_rows(obs, name + "/step", H5T_NATIVE_INT64, st.data(), st.size(), path);
     append_rows(obs, name + "/time", H5T_NATIVE_DOUBLE, tm.data(), tm.size(), path);
-    append_rows(obs, name + "/value", H5T_NATIVE_DOUBLE, val.data(), st.size(), path);
+    append_rows(obs, name + "/value", val.memtype(), val.data(), st.size(), path);
   }
 }
 
@@ -687,9 +707,15 @@ void require_matches(const TrajectoryInfo& info, const RunHeader& h, const std::
   if (info.particles != h.particles)
     refuse("it holds " + std::to_string(info.particles) + " particles, the run has " + std::to_string(h.particles));
   if (info.periodic != h.domain.periodic()) refuse("box boundary differs");
-  if (info.sheared_box != (h.domain.periodic() && h.sheared_box)) refuse("sheared box differs");
+  // Edges per frame hold any box; a fixed edges dataset (unsheared boxes in files of 0.1.0) cannot
+  // follow a sheared one.
+  if (!info.sheared_box && h.domain.periodic() && h.sheared_box) refuse("sheared box differs");
   if (field_set(info.particle_fields) != field_set(h.particle_fields)) refuse("recorded per-particle quantities differ");
-  if (!same_scene(info.scene_toml, h.scene_toml)) refuse("the scene differs from the one stored in parameters/stokesian/scene");
+  if (const auto diff = scene_differences(info.scene_toml, h.scene_toml); !diff.empty()) {
+    std::string keys;
+    for (std::size_t i = 0; i < diff.size(); ++i) keys += (i ? "; " : "") + diff[i];
+    refuse("the scene differs from the one stored in parameters/stokesian/scene (file -> this scene): " + keys);
+  }
   const ModelKey file_key = ModelKey::from_stored(info.model_key), run_key = ModelKey::from_stored(h.model_key);
   if (file_key != run_key || (file_key.empty() && info.model != h.model))
     refuse("the model differs (file: \"" + (file_key.empty() ? info.model : file_key.text()) + "\", run: \"" +
@@ -725,9 +751,21 @@ Trajectory Trajectory::resume(const std::string& path, const RunHeader& header, 
 
   // Source: P if it passes the consistency check; otherwise the shadow (it may lack the last
   // segment, which the frame count below detects).
+  // Files written before image counts existed (0.1.0) continue without the image element: their
+  // checkpoints hold no counts.
+  auto adapted = [&header](const TrajectoryInfo& info) {
+    RunHeader h = header;
+    if (!info.records("image"))
+      h.particle_fields.erase(std::remove_if(h.particle_fields.begin(), h.particle_fields.end(),
+                                             [](const FieldSpec& f) { return f.name == "image"; }),
+                              h.particle_fields.end());
+    return h;
+  };
   std::string source, p_problem;
   try {
-    require_matches(inspect_trajectory(path), header, path);
+    const TrajectoryInfo info = inspect_trajectory(path);
+    t.header_ = adapted(info);
+    require_matches(info, t.header_, path);
     source = path;
   } catch (const IoError& e) {
     p_problem = e.what();
@@ -735,7 +773,9 @@ Trajectory Trajectory::resume(const std::string& path, const RunHeader& header, 
   }
   if (source.empty()) {
     try {
-      require_matches(inspect_trajectory(S), header, S);
+      const TrajectoryInfo info = inspect_trajectory(S);
+      t.header_ = adapted(info);
+      require_matches(info, t.header_, S);
       source = S;
     } catch (const IoError& e) {
       throw IoError(path + ": cannot resume: trajectory unusable (" + p_problem + ") and shadow unusable (" + e.what() + ")");
@@ -844,6 +884,34 @@ void Trajectory::commit() {
   previous_ = std::move(pending_);
   pending_.clear();
   pending_bytes_ = 0;
+}
+
+void Trajectory::finish() {
+  commit();
+  detail::remove_if_exists(shadow_path());
+  detail::fsync_parent_dir(path_);
+  shadow_suspect_ = true;  // a later commit rebuilds S from P
+}
+
+void Trajectory::write_frames(const std::string& path, const RunHeader& header, const std::vector<Frame>& frames) {
+  Trajectory t(path, header);
+  for (const Frame& f : frames) {
+    t.check_frame(f);
+    t.last_step_ = f.step;
+    t.any_step_ = true;
+  }
+  const std::string tmp = path + ".tmp";
+  write_layout(tmp, header);
+  {
+    H f = open_file(tmp, H5F_ACC_RDWR);
+    std::vector<const Frame*> todo;
+    for (const Frame& fr : frames) todo.push_back(&fr);
+    append_frames(f, tmp, header, todo);
+    f.close(tmp);
+  }
+  detail::fsync_file(tmp);
+  detail::durable_rename(tmp, path);
+  detail::remove_if_exists(t.shadow_path());  // a previous run's working copy at this path
 }
 
 Snapshot read_last_frame(const std::string& path) {

@@ -4,9 +4,13 @@
 //
 // Layout (docs/output.md has the full tree and h5py examples):
 //   /h5md                      +version=[1,1]; author/+name; creator/+name,+version
-//   /particles/all/box         +dimension=3, +boundary=3 x "none"|"periodic", edges
+//   /h5md/modules/units        +version=[1,0], +system: the reduced units a, mu, kT
+//   /particles/all/box         +dimension=3, +boundary=3 x "none"|"periodic", edges (periodic:
+//                              element [frames][3][3], rows = edge vectors)
 //   /particles/all/<field>/{step,time,value}   every per-particle field of the RunHeader, in its
-//                              order (position first: its step/time are shared by the others)
+//                              order (position first: its step/time are shared by the others);
+//                              `unit` attributes on value and time datasets (FieldSpec::unit);
+//                              integer fields (image) as int64 datasets
 //   /observables/<name>/{step,time,value}   every observable of the frames, shape of its first frame
 //   /parameters/stokesian/{scene,model,model_key,version,git,compiler,build_type}
 // The writer knows no quantity by name except position (the clock) and the box.
@@ -43,6 +47,12 @@ class Trajectory {
   // bounds memory for runs that checkpoint rarely.
   void append(Frame frame);
   void commit();  // make every buffered frame visible in the file (protocol above)
+  // Commit, then delete the working copy S (a run that reached its end). A later commit or
+  // resume rebuilds S from P.
+  void finish();
+  // Write a complete trajectory holding `frames` at `path` in one go (via path + ".tmp", fsync,
+  // rename): no working copy is left behind (`stokesian solve`).
+  static void write_frames(const std::string& path, const RunHeader& header, const std::vector<Frame>& frames);
   std::size_t max_pending_bytes = std::size_t(256) << 20;
 
   const std::string& path() const { return path_; }
@@ -75,7 +85,8 @@ struct TrajectoryInfo {
   std::int64_t frames = 0;
   std::int64_t first_step = 0, last_step = 0;
   double last_time = 0.0;
-  bool periodic = false, sheared_box = false;
+  bool periodic = false;
+  bool sheared_box = false;  // box edges stored per frame (every periodic box since 0.2; 0.1.0: sheared only)
   std::vector<FieldSpec> particle_fields;  // name and item shape of every per-particle field (by name)
   std::string scene_toml, model, version;
   std::string model_key;  // stored key, or the key read from a 0.1.0 model description

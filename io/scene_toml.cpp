@@ -393,13 +393,25 @@ Scene parse_scene(const toml::table& root, const std::string& source) {
   s.time.rkf_tolerance = R.number(ti, "time", "rkf_tolerance", 1e-6, 1e-14, 1.0);
 
   const toml::table& out = sub(R, root, "output");
-  R.only(out, "output", {"every", "checkpoint_every", "record", "xyz"});
+  R.only(out, "output", {"every", "checkpoint_every", "record", "xyz", "author"});
   s.output.every = R.integer(out, "output", "every", 1, 1, std::numeric_limits<long>::max());
   s.output.checkpoint_every = R.integer(out, "output", "checkpoint_every", 0, 0, std::numeric_limits<long>::max());
   if (s.output.checkpoint_every > 0 && s.output.checkpoint_every % s.output.every != 0)
     R.fail(out.get("checkpoint_every"), "[output] checkpoint_every",
            "must be a multiple of [output] every (" + std::to_string(s.output.every) + ")");
-  s.output.xyz = R.string(out, "output", "xyz", "");
+  // xyz: false | true (<out stem>.xyz beside --out) | "path" (relative to the folder of --out).
+  if (const toml::node* xn = R.get(out, "output", "xyz")) {
+    if (const auto b = xn->value_exact<bool>()) {
+      s.output.xyz = *b;
+      s.output.xyz_path.clear();
+    } else if (const auto p = xn->value_exact<std::string>()) {
+      s.output.xyz = !p->empty();  // "" (written by 0.1.0 for no export) = false
+      s.output.xyz_path = *p;
+    } else {
+      R.fail(xn, "[output] xyz", "expected true, false or a path, got " + Reader::type_name(*xn));
+    }
+  }
+  s.output.author = R.string(out, "output", "author", "");
   if (const toml::node* rn = R.get(out, "output", "record")) {
     const toml::array* a = rn->as_array();
     if (!a) R.fail(rn, "[output] record", "expected a list of names");
@@ -488,20 +500,75 @@ std::string resolved_toml(const Scene& s) {
   root.insert("output", toml::table{{"every", int64_t(s.output.every)},
                                     {"checkpoint_every", int64_t(s.output.checkpoint_every)},
                                     {"record", record},
-                                    {"xyz", s.output.xyz}});
+                                    {"author", s.output.author}});
+  if (!s.output.xyz || s.output.xyz_path.empty()) root["output"].as_table()->insert("xyz", s.output.xyz);
+  else root["output"].as_table()->insert("xyz", s.output.xyz_path);
   std::ostringstream o;
   o.precision(17);
   o << "# Fully resolved scene (every key explicit; generated particles listed). Re-run it as is.\n" << root << "\n";
   return o.str();
 }
 
-bool same_scene(const std::string& a, const std::string& b) {
-  if (a == b) return true;
-  try {
-    return resolved_toml(parse_scene(a, "stored scene")) == resolved_toml(parse_scene(b, "stored scene"));
-  } catch (const ConfigError&) {
-    return false;
+bool same_scene(const std::string& a, const std::string& b) { return scene_differences(a, b).empty(); }
+
+namespace {
+
+// A leaf value as TOML text, shortened for messages.
+std::string brief_value(const toml::node& n) {
+  std::ostringstream o;
+  o.precision(17);
+  if (const auto* s = n.as_string()) o << '"' << s->get() << '"';
+  else o << toml::node_view<const toml::node>(&n);
+  std::string t = o.str();
+  constexpr std::size_t kMax = 60;
+  if (t.size() > kMax) t = t.substr(0, kMax - 3) + "...";
+  return t;
+}
+
+// Keys whose values differ between two resolved scene tables, as "[table] key: a -> b".
+void table_differences(const toml::table& a, const toml::table& b, const std::string& table,
+                       std::vector<std::string>& out) {
+  std::set<std::string> keys;
+  for (const auto& [k, v] : a) keys.insert(std::string(k.str()));
+  for (const auto& [k, v] : b) keys.insert(std::string(k.str()));
+  for (const auto& key : keys) {
+    const toml::node* x = a.get(key);
+    const toml::node* y = b.get(key);
+    if (x && y && x->is_table() && y->is_table()) {
+      table_differences(*x->as_table(), *y->as_table(), table.empty() ? key : table + "." + key, out);
+      continue;
+    }
+    const std::string vx = x ? brief_value(*x) : "(absent)", vy = y ? brief_value(*y) : "(absent)";
+    std::ostringstream fx, fy;  // full texts: a long value may differ after the shortened part
+    fx.precision(17);
+    fy.precision(17);
+    if (x) fx << toml::node_view<const toml::node>(x);
+    if (y) fy << toml::node_view<const toml::node>(y);
+    if (bool(x) != bool(y) || fx.str() != fy.str())
+      out.push_back((table.empty() ? "" : "[" + table + "] ") + key + ": " + vx + " -> " + vy);
   }
+}
+
+}  // namespace
+
+std::vector<std::string> scene_differences(const std::string& a, const std::string& b) {
+  if (a == b) return {};
+  std::string ra, rb;
+  try {
+    ra = resolved_toml(parse_scene(a, "stored scene"));
+  } catch (const ConfigError& e) {
+    return {std::string("the stored scene does not parse: ") + e.what()};
+  }
+  try {
+    rb = resolved_toml(parse_scene(b, "this scene"));
+  } catch (const ConfigError& e) {
+    return {std::string("this scene does not parse: ") + e.what()};
+  }
+  if (ra == rb) return {};
+  std::vector<std::string> out;
+  table_differences(toml::parse(ra), toml::parse(rb), "", out);
+  if (out.empty()) out.push_back("the resolved scene texts differ");
+  return out;
 }
 
 Scene load_scene(const std::string& path) {

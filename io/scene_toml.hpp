@@ -5,6 +5,7 @@
 #include "engine/core/scene.hpp"
 
 #include <string>
+#include <vector>
 
 namespace toml {
 inline namespace v3 {
@@ -28,5 +29,9 @@ std::string resolved_toml(const Scene& s);
 // and resolving both again (so that formatting, key order and keys added with their defaults by
 // a later version do not matter). Used to recognise a run on resume.
 bool same_scene(const std::string& a, const std::string& b);
+// What differs between two scene texts `a` (stored) and `b` (this run), one entry per key after
+// resolving both: "[table] key: <value in a> -> <value in b>" (long values shortened). Empty when
+// same_scene(a, b). A text that does not parse gives one entry saying so.
+std::vector<std::string> scene_differences(const std::string& a, const std::string& b);
 
 }  // namespace stokesian::io

@@ -202,14 +202,43 @@ std::vector<XyzFrame> read_xyz(const std::string& path) {
   return out;
 }
 
+std::vector<std::string> species_labels(const std::vector<double>& radius, const std::vector<char>& fixed) {
+  std::vector<double> classes(radius);
+  std::sort(classes.begin(), classes.end());
+  classes.erase(std::unique(classes.begin(), classes.end()), classes.end());
+  const bool numbered = classes.size() > 1 && classes.size() <= kMaxSizeClasses;
+  std::vector<std::string> out(radius.size());
+  for (std::size_t i = 0; i < radius.size(); ++i) {
+    std::string label = !fixed.empty() && fixed[i] ? "F" : "M";
+    if (numbered) label += std::to_string(std::lower_bound(classes.begin(), classes.end(), radius[i]) - classes.begin() + 1);
+    out[i] = label;
+  }
+  return out;
+}
+
 void write_xyz_frame(std::ostream& os, const Frame& f, const Domain& domain, const std::vector<std::string>& species) {
-  static const std::vector<double> none;
   const std::vector<double>& pos = f.particles.at("position").values;
-  auto r = f.particles.find("radius");
-  const std::vector<double>& radius = r == f.particles.end() ? none : r->second.values;
   const std::size_t n = pos.size() / 3;
-  if (!radius.empty() && radius.size() != n) throw IoError("XYZ export: radius and position sizes differ");
   if (!species.empty() && species.size() != n) throw IoError("XYZ export: species and position sizes differ");
+  // Columns after pos, named as OVITO and ASE map them (radius -> Radius, velo -> Velocity,
+  // omega -> Angular Velocity, forces -> Force); each only when the frame has it.
+  struct Column {
+    const char* field;
+    const char* name;
+    std::size_t width;
+    const std::vector<double>* values = nullptr;
+  };
+  std::vector<Column> cols{{"radius", "radius", 1}, {"velocity", "velo", 3}, {"angular_velocity", "omega", 3},
+                           {"force", "forces", 3},  {"torque", "torque", 3}};
+  std::string props = "species:S:1:pos:R:3";
+  for (auto& c : cols) {
+    auto it = f.particles.find(c.field);
+    if (it == f.particles.end()) continue;
+    if (it->second.values.size() != c.width * n)
+      throw IoError(std::string("XYZ export: ") + c.field + " and position sizes differ");
+    c.values = &it->second.values;
+    props += std::string(":") + c.name + ":R:" + std::to_string(c.width);
+  }
   os << n << '\n';
   if (domain.periodic()) {
     const Vec3& L = domain.box;
@@ -220,19 +249,24 @@ void write_xyz_frame(std::ostream& os, const Frame& f, const Domain& domain, con
       put(os, m[i]);
     }
     os << "\" pbc=\"T T T\" ";
+  } else {
+    os << "pbc=\"F F F\" ";
   }
-  os << "Properties=species:S:1:pos:R:3" << (radius.empty() ? "" : ":radius:R:1") << " Time=";
+  os << "Properties=" << props << " Time=";
   put(os, f.time);
   os << " Step=" << f.step << '\n';
   for (std::size_t i = 0; i < n; ++i) {
-    os << (species.empty() ? std::string("P") : species[i]);
+    os << (species.empty() ? std::string("M") : species[i]);
     for (int k = 0; k < 3; ++k) {
       os << ' ';
       put(os, pos[3 * i + std::size_t(k)]);
     }
-    if (!radius.empty()) {
-      os << ' ';
-      put(os, radius[i]);
+    for (const auto& c : cols) {
+      if (!c.values) continue;
+      for (std::size_t k = 0; k < c.width; ++k) {
+        os << ' ';
+        put(os, (*c.values)[c.width * i + k]);
+      }
     }
     os << '\n';
   }

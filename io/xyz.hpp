@@ -1,11 +1,13 @@
 #pragma once
 // Extended XYZ (the ASE/OVITO convention): per frame
 //   N
-//   Lattice="ax ay az bx by bz cx cy cz" pbc="T T T" Properties=species:S:1:pos:R:3:radius:R:1 Time=t Step=s
-//   P x y z a          (N lines)
-// Lattice (rows = cell vectors) is written for periodic boxes only; with Lees-Edwards strain g the
-// second vector is (g Ly, Ly, 0). Numbers are printed with 17 significant digits, so reading a
-// file back reproduces the doubles exactly.
+//   Lattice="ax ay az bx by bz cx cy cz" pbc="T T T" Properties=species:S:1:pos:R:3:radius:R:1[:velo:R:3
+//     :omega:R:3:forces:R:3:torque:R:3] Time=t Step=s
+//   M1 x y z a [...]   (N lines)
+// Lattice (rows = cell vectors) is written for periodic boxes only (open boxes: pbc="F F F" and
+// no Lattice); with Lees-Edwards strain g the second vector is (g Ly, Ly, 0). The optional
+// columns are those the frame holds. Species: species_labels(). Numbers are printed with 17
+// significant digits, so reading a file back reproduces the doubles exactly.
 #include "engine/core/domain.hpp"
 #include "engine/core/frame.hpp"
 #include "engine/core/types.hpp"
@@ -32,7 +34,15 @@ struct XyzFrame {
 // Errors name the file and the line.
 std::vector<XyzFrame> read_xyz(const std::string& path);
 
-// Write one frame (position and radius of `f`). species: one label per particle, or empty for "P".
+// Species labels that tell particles apart in a viewer: "M" (mobile) or "F" (fixed), followed by
+// the size class, 1 for the smallest distinct radius, 2 for the next ... ; without the number when
+// all radii are equal or there are more than kMaxSizeClasses distinct radii (then the radius
+// column alone tells sizes apart).
+constexpr std::size_t kMaxSizeClasses = 16;
+std::vector<std::string> species_labels(const std::vector<double>& radius, const std::vector<char>& fixed);
+
+// Write one frame (position, radius and the kinematic fields `f` has). species: one label per
+// particle, or empty for "M".
 void write_xyz_frame(std::ostream& os, const Frame& f, const Domain& domain,
                      const std::vector<std::string>& species = {});
 

@@ -234,7 +234,12 @@ TEST_CASE("H5MD layout: names, shapes, attributes and values read back with the 
   CHECK(read_str_attr(f.id, "/h5md/author", "name") == std::vector<std::string>{"test"});
   CHECK(read_str_attr(f.id, "/particles/all/box", "boundary") ==
         std::vector<std::string>{"periodic", "periodic", "periodic"});
-  CHECK(read_all<double>(f.id, "/particles/all/box/edges", H5T_NATIVE_DOUBLE) == std::vector<double>{10, 12, 14});
+  {  // periodic boxes: edges per frame (readers such as MDAnalysis need a time-dependent box)
+    const std::vector<double> one{10, 0, 0, 0, 12, 0, 0, 0, 14};
+    std::vector<double> three;
+    for (int k = 0; k < 3; ++k) three.insert(three.end(), one.begin(), one.end());
+    CHECK(read_all<double>(f.id, "/particles/all/box/edges/value", H5T_NATIVE_DOUBLE) == three);
+  }
   CHECK(read_str_attr(f.id, "/particles/all/stresslet", "components") ==
         std::vector<std::string>{"xx", "xy", "xz", "yy", "yz", "zz"});
 

@@ -4,7 +4,11 @@
 #include "io/h5md.hpp"
 #include "io/xyz.hpp"
 
+#include <cstdlib>
+#include <filesystem>
 #include <optional>
+#include <pwd.h>
+#include <unistd.h>
 
 namespace stokesian::app {
 
@@ -22,6 +26,8 @@ class RunFiles final : public OutputSink {
     out_.checkpoint(s);
     if (xyz_) xyz_->flush();
   }
+  // The run reached its last step: the trajectory's working copy is no longer needed.
+  void finish() { out_.trajectory().finish(); }
 
  private:
   io::RunOutput out_;
@@ -30,8 +36,31 @@ class RunFiles final : public OutputSink {
 
 }  // namespace
 
+std::string default_author() {
+  if (const passwd* pw = ::getpwuid(::getuid()); pw && pw->pw_name && *pw->pw_name) return pw->pw_name;
+  for (const char* var : {"USER", "LOGNAME"})
+    if (const char* v = std::getenv(var); v && *v) return v;
+  return "unknown";
+}
+
+std::string xyz_path(const Scene& scene, const std::string& out) {
+  if (!scene.output.xyz) return "";
+  namespace fs = std::filesystem;
+  const fs::path o(out);
+  if (scene.output.xyz_path.empty()) return (o.parent_path() / o.stem()).string() + ".xyz";
+  const fs::path p(scene.output.xyz_path);
+  return p.is_absolute() ? p.string() : (o.parent_path() / p).string();
+}
+
+RunHeader run_header(const Simulation& sim) {
+  RunHeader h = sim.header();
+  h.author = sim.scene().output.author.empty() ? default_author() : sim.scene().output.author;
+  return h;
+}
+
 long run(Simulation& sim, const RunOptions& opt) {
   const Scene& scene = sim.scene();
+  const RunHeader header = run_header(sim);
   State s;
   RunControl control;
   control.quiet = opt.quiet;
@@ -39,27 +68,28 @@ long run(Simulation& sim, const RunOptions& opt) {
   std::optional<io::RunOutput> out;
   if (opt.resume) {
     io::Checkpoint restored;
-    out.emplace(io::RunOutput::resume(opt.out, sim.header(), restored));
+    out.emplace(io::RunOutput::resume(opt.out, header, restored));
     s = restored.state;
     control.frame_done = s.step % scene.output.every == 0;
   } else {
     s = sim.initial_state();
-    out.emplace(io::RunOutput::start(opt.out, sim.header()));
+    out.emplace(io::RunOutput::start(opt.out, header));
   }
   std::optional<io::XyzWriter> xyz;
-  if (!scene.output.xyz.empty())
-    xyz.emplace(scene.output.xyz, s.domain, std::vector<std::string>{},
+  if (const std::string path = xyz_path(scene, opt.out); !path.empty())
+    xyz.emplace(path, s.domain, io::species_labels(s.radius, s.fixed),
                 opt.resume ? std::optional<std::int64_t>(s.step) : std::nullopt);
   RunFiles files(std::move(*out), std::move(xyz));
-  return sim.run(s, files, control);
+  const long taken = sim.run(s, files, control);
+  if (s.step >= scene.time.steps) files.finish();
+  return taken;
 }
 
 void solve(Simulation& sim, const std::string& path) {
   const State s = sim.initial_state();
   const Evaluation ev = sim.evaluate(s, s.position, 0.0, true);
-  io::Trajectory t = io::Trajectory::create(path, sim.header());
-  t.append(sim.frame(s, ev));
-  t.commit();
+  io::Trajectory::write_frames(path, run_header(sim), {sim.frame(s, ev)});
+  io::detail::remove_if_exists(io::checkpoint_path(path));  // a previous run's, now stale
 }
 
 }  // namespace stokesian::app

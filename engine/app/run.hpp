@@ -1,7 +1,8 @@
 #pragma once
 // The application layer: the only code that joins the engine (simulation) and its writers (io/).
 // A run writes its trajectory (H5MD), its checkpoint and optionally an XYZ export through one
-// OutputSink; --resume continues from the checkpoint.
+// OutputSink; --resume continues from the checkpoint. A run that reaches its last step removes
+// the trajectory's working copy (.shadow) and keeps the checkpoint (docs/output.md).
 #include "engine/simulation.hpp"
 
 #include <string>
@@ -17,7 +18,16 @@ struct RunOptions {
 
 // Full run with periodic checkpoints; returns the number of steps taken by this call.
 long run(Simulation& sim, const RunOptions& opt);
-// One solve of the initial configuration written as a single frame.
+// One solve of the initial configuration written as a single frame (no working copy, no
+// checkpoint).
 void solve(Simulation& sim, const std::string& out);
+
+// The run's header with /h5md/author: [output] author, else default_author().
+RunHeader run_header(const Simulation& sim);
+// Login name of the user running the program (passwd entry, else $USER, $LOGNAME), else "unknown".
+std::string default_author();
+// Path of the XYZ export of a run writing trajectory `out` ("" when [output] xyz is off):
+// <out stem>.xyz beside `out`, or [output] xyz resolved against the folder of `out`.
+std::string xyz_path(const Scene& scene, const std::string& out);
 
 }  // namespace stokesian::app

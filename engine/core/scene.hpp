@@ -121,7 +121,11 @@ struct OutputParams {
   // default is the standard kinematic set; an output the resolved model does not compute (e.g.
   // stresslet below FTS) is not written.
   std::vector<std::string> record{"angular_velocity", "force", "stresslet", "torque", "velocity"};
-  std::string xyz;                     // optional extended-XYZ export path ("" = none)
+  // Extended-XYZ export (docs/output.md): off, or on at xyz_path relative to the folder of the
+  // trajectory (--out); an empty xyz_path means <trajectory stem>.xyz beside the trajectory.
+  bool xyz = false;
+  std::string xyz_path;
+  std::string author;                  // H5MD /h5md/author name; "" = the login name of the user
 };
 
 struct Scene {
