@@ -100,8 +100,9 @@ void Simulation::advance(State& s, const Evaluation& ev, Rng& rng) {
   s.time += r.dt_used;
   s.step += 1;
   s.dt = r.dt_next;
+  const double unreduced_strain = s.domain.shear_strain + strain_rate_ * r.dt_used;
   if (strain_rate_ != 0.0) s.domain = s.domain.strained_by(strain_rate_ * r.dt_used);
-  for (Vec3& x : s.position) s.domain.wrap(x);
+  wrap_positions(s, unreduced_strain);  // wraps into the box and counts images (state.hpp)
   check_finite(s);
 }
 
