@@ -3,6 +3,7 @@
 #include "engine/core/errors.hpp"
 #include "engine/core/parallel.hpp"
 #include "engine/methods.hpp"
+#include "engine/progress.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -128,44 +129,6 @@ Frame Simulation::frame(const State& s, const Evaluation& ev) const {
   return f;
 }
 
-namespace {
-
-// Terminal progress (steps/s, ETA, diagnostics) or plain log lines when not a terminal.
-class Progress {
- public:
-  Progress(long first, long last, bool quiet)
-      : first_(first), last_(last), quiet_(quiet), tty_(isatty(fileno(stderr))), start_(clock::now()), shown_(start_) {}
-  void update(long step, double time, const Frame* f, bool force = false) {
-    if (quiet_) return;
-    const auto now = clock::now();
-    const double since = std::chrono::duration<double>(now - shown_).count();
-    if (!force && since < (tty_ ? kTerminalSeconds : kLogSeconds)) return;
-    shown_ = now;
-    const double el = std::chrono::duration<double>(now - start_).count();
-    const double rate = el > 0 ? double(step - first_) / el : 0.0;
-    const double eta = rate > 0 ? double(last_ - step) / rate : 0.0;
-    char buf[256];
-    std::snprintf(buf, sizeof buf, "step %ld/%ld  t=%.4g  %.3g steps/s  ETA %.0fs", step, last_, time, rate, eta);
-    std::string line = buf;
-    if (f) {
-      std::snprintf(buf, sizeof buf, "  min_gap=%.3g overlaps=%.0f", f->scalar("min_gap"), f->scalar("overlaps"));
-      line += buf;
-    }
-    if (tty_) std::fprintf(stderr, "\r%-100s", line.c_str());
-    else std::fprintf(stderr, "%s\n", line.c_str());
-    if (tty_ && force) std::fprintf(stderr, "\n");
-  }
-
- private:
-  static constexpr double kTerminalSeconds = 0.5, kLogSeconds = 10.0;  // refresh intervals
-  using clock = std::chrono::steady_clock;
-  long first_, last_;
-  bool quiet_, tty_;
-  clock::time_point start_, shown_;
-};
-
-}  // namespace
-
 long Simulation::run(State& s, OutputSink& out, const RunControl& control) {
   Rng rng;
   {
@@ -174,7 +137,7 @@ long Simulation::run(State& s, OutputSink& out, const RunControl& control) {
   }
   const long last = scene_.time.steps;
   const std::int64_t every = scene_.output.every;
-  Progress progress(long(s.step), last, control.quiet);
+  progress::Progress progress(long(s.step), last, control.quiet);
   bool frame_done = control.frame_done;
   long taken = 0;
   Frame latest;
@@ -206,12 +169,17 @@ long Simulation::run(State& s, OutputSink& out, const RunControl& control) {
       s.rng_state = o.str();
       out.checkpoint(s);
     }
+    // Progress of the step reached, with the latest frame's diagnostics; the last step's line is
+    // printed once, by finish() after the loop.
     if (at_end) break;
+    if (taken > 0)
+      progress.update(long(s.step), s.time, have_latest, have_latest ? latest.scalar("min_gap") : 0.0,
+                      have_latest ? latest.scalar("overlaps") : 0.0);
     advance(s, ev, rng);
     ++taken;
-    progress.update(long(s.step), s.time, have_latest ? &latest : nullptr);
   }
-  progress.update(long(s.step), s.time, have_latest ? &latest : nullptr, true);
+  progress.finish(long(s.step), s.time, have_latest, have_latest ? latest.scalar("min_gap") : 0.0,
+                  have_latest ? latest.scalar("overlaps") : 0.0);
   return taken;
 }
 

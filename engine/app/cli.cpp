@@ -1,0 +1,285 @@
+#include "engine/app/cli.hpp"
+
+#include "engine/app/check.hpp"
+#include "engine/app/run.hpp"
+#include "engine/core/errors.hpp"
+#include "engine/progress.hpp"
+#include "engine/simulation.hpp"
+#include "io/scene_toml.hpp"
+#include "stokesian/build_info.hpp"
+
+#include <CLI/CLI.hpp>
+#include <omp.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <charconv>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace fs = std::filesystem;
+
+namespace stokesian::app {
+
+namespace {
+
+constexpr int kMaxThreads = 1024;
+
+// Validators that name the value and the allowed range (CLI11 prefixes the option name).
+CLI::Validator integer_in(long lo, long hi) {
+  const std::string range = std::to_string(lo) + " to " + std::to_string(hi);
+  return CLI::Validator(
+      [=](std::string& v) -> std::string {
+        long x = 0;
+        const char* b = v.data();
+        const char* e = b + v.size();
+        const auto r = std::from_chars(b, e, x);
+        if (r.ec != std::errc() || r.ptr != e)
+          return "\"" + v + "\" is not an integer; allowed: an integer from " + range;
+        if (x < lo || x > hi) return "\"" + v + "\" is out of range; allowed: an integer from " + range;
+        return {};
+      },
+      "");
+}
+
+CLI::Validator nonnegative_number() {
+  return CLI::Validator(
+      [](std::string& v) -> std::string {
+        char* end = nullptr;
+        errno = 0;
+        const double x = std::strtod(v.c_str(), &end);
+        if (v.empty() || end != v.c_str() + v.size() || errno == ERANGE || !(x >= 0) || !std::isfinite(x))
+          return "\"" + v + "\" is not a number >= 0; allowed: a finite number of seconds >= 0";
+        return {};
+      },
+      "");
+}
+
+std::string exe_dir() {
+  std::error_code ec;
+  const fs::path p = fs::read_symlink("/proc/self/exe", ec);
+  return ec ? std::string() : p.parent_path().string();
+}
+
+// Default trajectory path of a scene: its stem + ".h5" in the working directory.
+std::string default_out(const std::string& scene) { return fs::path(scene).stem().string() + ".h5"; }
+
+void report(const char* kind, const std::exception& e) { std::fprintf(stderr, "stokesian: %s: %s\n", kind, e.what()); }
+
+// Runs the scene commands, mapping errors to exit statuses.
+template <class F>
+int guarded(F&& f) {
+  try {
+    return f();
+  } catch (const ConfigError& e) {
+    report("error", e);
+    return 2;
+  } catch (const PhysicsError& e) {
+    report("physics error", e);
+    return 3;
+  } catch (const IoError& e) {
+    report("file error", e);
+    return 4;
+  } catch (const std::exception& e) {
+    report("error", e);
+    return 4;
+  }
+}
+
+int plot(const std::string& traj, std::string png, const std::string& python_opt, long frame,
+         const std::string& projection) {
+  if (!fs::exists(traj)) {
+    std::fprintf(stderr, "stokesian: file error: %s: no such file\n", traj.c_str());
+    return 4;
+  }
+  std::vector<std::string> searched;
+  const std::string script = find_plot_script(&searched);
+  if (script.empty()) {
+    std::string where;
+    for (const auto& s : searched) where += "\n  " + s;
+    std::fprintf(stderr, "stokesian: file error: the plot script stokesian_plot.py was not found; looked in:%s\n",
+                 where.c_str());
+    return 4;
+  }
+  if (png.empty()) png = fs::path(traj).replace_extension(".png").string();
+  // Interpreter: --python, else /usr/bin/python3, else python3 on PATH.
+  std::string python = python_opt;
+  if (python.empty()) python = access("/usr/bin/python3", X_OK) == 0 ? "/usr/bin/python3" : "python3";
+  std::vector<std::string> args{python, script, traj, "--out", png, "--frame", std::to_string(frame),
+                                "--projection", projection};
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  std::fflush(nullptr);
+  const pid_t pid = fork();
+  if (pid < 0) {
+    std::fprintf(stderr, "stokesian: error: fork: %s\n", std::strerror(errno));
+    return 4;
+  }
+  if (pid == 0) {
+    execvp(argv[0], argv.data());
+    std::fprintf(stderr, "stokesian: error: cannot run %s: %s\n", argv[0], std::strerror(errno));
+    _exit(127);
+  }
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0)
+    if (errno != EINTR) {
+      std::fprintf(stderr, "stokesian: error: waitpid: %s\n", std::strerror(errno));
+      return 4;
+    }
+  if (WIFEXITED(status) && WEXITSTATUS(status) == 0) {
+    std::fprintf(stderr, "wrote %s\n", png.c_str());
+    return 0;
+  }
+  std::fprintf(stderr, "stokesian: file error: plotting failed (%s %s exited with status %d)\n", python.c_str(),
+               script.c_str(), WIFEXITED(status) ? WEXITSTATUS(status) : -1);
+  return 4;
+}
+
+}  // namespace
+
+std::string find_plot_script(std::vector<std::string>* searched) {
+  std::vector<std::string> places;
+  const std::string dir = exe_dir();
+  if (!dir.empty()) places.push_back((fs::path(dir) / ".." / "share" / "stokesian" / "stokesian_plot.py").lexically_normal().string());
+  places.push_back(STOKESIAN_PLOT_INSTALLED);
+  places.push_back(STOKESIAN_PLOT_SOURCE);
+  if (searched) *searched = places;
+  for (const auto& p : places)
+    if (fs::is_regular_file(p)) return p;
+  return {};
+}
+
+int main_cli(int argc, char** argv) {
+  CLI::App app{"Stokesian dynamics of colloidal suspensions (docs/cli.md).", "stokesian"};
+  app.option_defaults()->always_capture_default();
+  const std::string version = std::string("stokesian ") + build::version + " (" + build::git + ", " + build::compiler +
+                              ", " + build::build_type + ")";
+  app.set_version_flag("--version", version, "Print the version and build, then exit");
+  app.require_subcommand(1);  // one of run, solve, check, plot
+  app.footer(
+      "Exit status: 0 success, 1 usage, 2 scene/config error, 3 physics error, 4 file error.\n"
+      "Run `stokesian COMMAND --help` for the options of a command.");
+
+  std::string scene, out, python, projection = "xy";
+  int threads = 0;
+  double progress_interval = -1;
+  bool resume = false, quiet = false, no_estimate = false;
+  std::string threads_text;
+
+  auto add_scene = [&](CLI::App* c) {
+    c->add_option("scene", scene, "Scene file (TOML; docs/scene.md)")->required()->type_name("SCENE.toml");
+  };
+  auto add_threads = [&](CLI::App* c) {
+    c->add_option("--threads", threads_text,
+                  "OpenMP threads, an integer from 1 to " + std::to_string(kMaxThreads) +
+                      "; default: OMP_NUM_THREADS, else all cores")
+        ->check(integer_in(1, kMaxThreads))
+        ->type_name("INT")
+        ->default_str("OpenMP default");
+  };
+
+  CLI::App* run = app.add_subcommand("run", "Run a scene: write its trajectory and checkpoints");
+  add_scene(run);
+  run->add_option("--out", out, "Trajectory file (H5MD); default: the scene's name with .h5, in the working directory")
+      ->type_name("FILE.h5")
+      ->default_str("SCENE.h5");
+  add_threads(run);
+  run->add_flag("--resume", resume, "Continue an interrupted run from FILE.h5.ckpt");
+  run->add_flag("--quiet", quiet, "No model description and no progress on stderr");
+  run->add_option("--progress-interval", progress_interval,
+                  "Seconds between progress lines (a number >= 0); default 0.5 on a terminal, 10 otherwise")
+      ->check(nonnegative_number())
+      ->type_name("SECONDS")
+      ->default_str("0.5|10");
+
+  CLI::App* solve = app.add_subcommand("solve", "One hydrodynamic solve of the initial state, written as one frame");
+  add_scene(solve);
+  solve->add_option("--out", out, "Output file (H5MD)")->required()->type_name("FILE.h5");
+  add_threads(solve);
+  solve->add_flag("--quiet", quiet, "No model description on stderr");
+
+  CLI::App* check = app.add_subcommand(
+      "check", "Validate a scene and report the resolved model, forces, outputs, initial overlaps, cost and step-size limits");
+  add_scene(check);
+  check->add_option("--out", out, "Trajectory path the run would write (reported); default as for run")
+      ->type_name("FILE.h5")
+      ->default_str("SCENE.h5");
+  add_threads(check);
+  check->add_flag("--no-estimate", no_estimate, "Do not evaluate the initial state (no cost estimate, no displacement check)");
+
+  CLI::App* plot_cmd = app.add_subcommand("plot", "Chart a trajectory: observables, particle statistics, a snapshot (PNG)");
+  std::string traj;
+  plot_cmd->add_option("trajectory", traj, "Trajectory written by run or solve")->required()->type_name("FILE.h5");
+  plot_cmd->add_option("--out", out, "Image file; default: the trajectory's name with .png")
+      ->type_name("FILE.png")
+      ->default_str("FILE.png");
+  std::string frame_text = "-1";
+  plot_cmd->add_option("--frame", frame_text, "Frame of the snapshot, an integer; negative counts from the end")
+      ->check(integer_in(-2147483647L, 2147483647L))
+      ->type_name("INT");
+  plot_cmd->add_option("--projection", projection, "Plane of the snapshot")
+      ->check(CLI::IsMember({"xy", "xz", "yz"}))
+      ->type_name("PLANE");
+  plot_cmd->add_option("--python", python,
+                       "Python 3 with numpy, matplotlib, h5py; default /usr/bin/python3, else python3 on PATH")
+      ->type_name("PATH")
+      ->default_str("/usr/bin/python3");
+
+  // A first word that is neither an option nor a command: name it (CLI11 would only say that a
+  // command is required).
+  const auto is_command = [&](const char* w) {
+    for (const CLI::App* c : app.get_subcommands({}))
+      if (c->get_name() == w) return true;
+    return false;
+  };
+  if (argc > 1 && argv[1][0] != '-' && !is_command(argv[1])) {
+    std::fprintf(stderr, "stokesian: unknown command \"%s\"; commands: run, solve, check, plot\n%s", argv[1],
+                 "Run `stokesian --help` for usage.\n");
+    return 1;
+  }
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const std::string name = e.get_name();
+    if (name == "CallForHelp" || name == "CallForAllHelp" || name == "CallForVersion") return app.exit(e);
+    std::fprintf(stderr, "stokesian: %s\nRun `stokesian --help` or `stokesian COMMAND --help` for usage.\n", e.what());
+    return 1;
+  }
+  if (!threads_text.empty()) threads = std::stoi(threads_text);  // validated above
+  if (threads > 0) omp_set_num_threads(threads);
+
+  if (plot_cmd->parsed()) return plot(traj, out, python, std::stol(frame_text), projection);
+  if (out.empty()) out = default_out(scene);
+
+  return guarded([&]() -> int {
+    Simulation sim(io::load_scene(scene));
+    if (check->parsed()) {
+      CheckOptions opt;
+      opt.out = out;
+      opt.estimate = !no_estimate;
+      opt.threads = threads;
+      return app::check(sim, opt, stdout);
+    }
+    if (!quiet) std::fprintf(stderr, "%s\n", sim.model().describe().c_str());
+    if (solve->parsed()) {
+      app::solve(sim, out);
+      if (!quiet) std::fprintf(stderr, "wrote %s\n", out.c_str());
+      return 0;
+    }
+    if (progress_interval >= 0) progress::refresh_override() = progress_interval;
+    RunOptions opt;
+    opt.out = out;
+    opt.resume = resume;
+    opt.quiet = quiet;
+    const long steps = app::run(sim, opt);
+    if (!quiet) std::fprintf(stderr, "%ld steps, wrote %s\n", steps, out.c_str());
+    return 0;
+  });
+}
+
+}  // namespace stokesian::app
