@@ -227,11 +227,11 @@ std::vector<hsize_t> dims_of(hid_t dset, const std::string& file) {
 }
 
 // Fixed-length, null-terminated UTF-8 string type (the H5MD convention for string attributes).
-H string_type(std::size_t len, const std::string& file) {
+H string_type(std::size_t len, const std::string& file, H5T_cset_t cset = H5T_CSET_UTF8) {
   H t = checked(H5Tcopy(H5T_C_S1), H5Tclose, file, "string type");
   H5Tset_size(t, std::max<std::size_t>(len + 1, 1));
   H5Tset_strpad(t, H5T_STR_NULLTERM);
-  H5Tset_cset(t, H5T_CSET_UTF8);
+  H5Tset_cset(t, cset);
   return t;
 }
 
@@ -245,10 +245,10 @@ void write_attr_ints(hid_t loc, const std::string& name, const std::vector<int>&
 }
 
 void write_attr_strings(hid_t loc, const std::string& name, const std::vector<std::string>& v, bool scalar,
-                        const std::string& file) {
+                        const std::string& file, H5T_cset_t cset = H5T_CSET_UTF8) {
   std::size_t len = 0;
   for (const auto& s : v) len = std::max(len, s.size());
-  H type = string_type(len, file);
+  H type = string_type(len, file, cset);
   const std::size_t width = len + 1;
   std::vector<char> buf(width * v.size(), '\0');
   for (std::size_t i = 0; i < v.size(); ++i) std::memcpy(buf.data() + i * width, v[i].data(), v[i].size());
@@ -369,12 +369,12 @@ void make_element(hid_t loc, const std::string& name, const std::vector<hsize_t>
   } else {
     extensible("step", H5T_STD_I64LE, {0}, 128);
     H t = extensible("time", H5T_IEEE_F64LE, {0}, 128);
-    write_attr_strings(t, "unit", {units::time}, true, file);
+    write_attr_strings(t, "unit", {units::time}, true, file, H5T_CSET_ASCII);  // H5MD: ASCII units
   }
   std::vector<hsize_t> shape{0};
   shape.insert(shape.end(), item.begin(), item.end());
   H v = extensible("value", integer ? H5T_STD_I64LE : H5T_IEEE_F64LE, shape, chunk_frames);
-  if (!unit.empty()) write_attr_strings(v, "unit", {unit}, true, file);
+  if (!unit.empty()) write_attr_strings(v, "unit", {unit}, true, file, H5T_CSET_ASCII);
 }
 
 // Field values as the dataset's memory type: integer fields as int64 (exact for the counts and
