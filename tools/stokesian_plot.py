@@ -171,7 +171,7 @@ def main():
         if h.size:
             ax.hist(h, bins=50, color="tab:orange", alpha=0.85)
             ax.axvline(0.0, color="k", lw=0.8)
-            ax.set_title(f"surface gaps below 2 a ({h.size} pairs, smallest {h.min():.3g} a, {int((h < 0).sum())} overlapping)")
+            ax.set_title(f"gaps < 2 a: {h.size} pairs, smallest {h.min():.3g} a, {int((h < 0).sum())} overlapping")
         else:
             ax.text(0.5, 0.5, "no pair closer than 2 a", ha="center", va="center", transform=ax.transAxes)
             ax.set_title("surface gaps")

@@ -373,8 +373,8 @@ int check(Simulation& sim, const CheckOptions& opt, std::FILE* out) {
   for (const auto& o : outside)
     std::fprintf(out,
                  "  warning: particle %d at %s is outside the box [0, L); the run uses its periodic image %s "
-                 "(forces and hydrodynamics see minimum images; positions are wrapped into the box after the first "
-                 "step)\n",
+                 "(forces and hydrodynamics see minimum images; frame 0 stores the position as given, later frames "
+                 "the wrapped one with its image counts)\n",
                  o.i, vec(o.position).c_str(), vec(o.wrapped).c_str());
   const GapStats gaps = gap_statistics(s.positions, s.radii, s.domain);
   if (overlaps.empty()) {
