@@ -353,6 +353,10 @@ TEST_CASE("plot writes one PNG of a short periodic run") {
   REQUIRE(fs::exists(png));
   const std::string head = read_text(png).substr(0, 8);
   CHECK(head == std::string("\x89PNG\r\n\x1a\n", 8));
+  // A frame the file does not have: a usage error naming the frames there are.
+  const Result frame = cli("plot " + traj.string() + " --out " + png.string() + " --frame 4");
+  CHECK(frame.status == 1);
+  CHECK(contains(frame.err, "--frame 4: the file has 4 frames (0 to 3, or -1 to -4)"));
   // Not a trajectory: a file error.
   const Result bad = cli("plot " + scene.string() + " --out " + (scratch() / "bad.png").string());
   CHECK(bad.status == 4);

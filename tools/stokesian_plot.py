@@ -226,4 +226,9 @@ def main():
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    try:
+        status = main()
+    except Exception as e:  # an unreadable or unexpected file: exit 4 with the reason (1 is kept for usage)
+        sys.stderr.write(f"stokesian_plot.py: {type(e).__name__}: {e}\n")
+        status = 4
+    sys.exit(status)

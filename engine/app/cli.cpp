@@ -135,6 +135,8 @@ int plot(const std::string& traj, std::string png, const std::string& python_opt
     std::fprintf(stderr, "wrote %s\n", png.c_str());
     return 0;
   }
+  // The script exits 1 for a bad request (e.g. a frame the file does not have), having said why.
+  if (WIFEXITED(status) && WEXITSTATUS(status) == 1) return 1;
   std::fprintf(stderr, "stokesian: file error: plotting failed (%s %s exited with status %d)\n", python.c_str(),
                script.c_str(), WIFEXITED(status) ? WEXITSTATUS(status) : -1);
   return 4;
