@@ -46,8 +46,7 @@ int main(int argc, char** argv) {
             << to_string(m) << "\"\ntolerance = 1e-6\n[time]\ndt = 0.01\n";
           Simulation sim(io::parse_scene(t.str(), "bench.toml"));
           State s = sim.initial_state();
-          std::mt19937_64 r(1);
-          phases["step"] = bench::median_time([&] { sim.advance(s, sim.evaluate(s, s.position), r); }, n <= 800 ? 3 : 1);
+          phases["step"] = bench::median_time([&] { sim.advance(s, sim.evaluate(s, s.position)); }, n <= 800 ? 3 : 1);
         }
         if (n <= 1600 && threads == 1) {
           MatX M;

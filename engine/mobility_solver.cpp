@@ -71,12 +71,11 @@ HydroResult MobilitySolver::solve(const HydroProblem& p) {
 }
 
 std::vector<Vec3> MobilitySolver::brownian_displacement(double kT, double dt, Rng& rng) {
-  std::normal_distribution<double> gauss(0.0, 1.0);
   const int d = dof_per_particle(op_->moments());
   std::vector<Vec3> dx(static_cast<std::size_t>(n_));
   const double pref = std::sqrt(2.0 * kT * dt);
   VecX w(n_ * d), y;
-  for (auto& v : w) v = gauss(rng);
+  for (auto& v : w) v = rng.normal();
   const MobilityOperator& op = *op_;
   LinearOperator M = [&op](const VecX& in, VecX& out) { op.apply(in, out); };
   const KrylovResult kr = lanczos_sqrt(M, w, y, tol_, kLanczosCap);
@@ -95,12 +94,11 @@ FreeDrainingSolver::FreeDrainingSolver(const MobilitySpec& spec)
 
 std::vector<Vec3> FreeDrainingSolver::brownian_displacement(double kT, double dt, Rng& rng) {
   const auto& a = static_cast<const SelfMobility&>(*op_).radii();
-  std::normal_distribution<double> gauss(0.0, 1.0);
   std::vector<Vec3> dx(a.size());
   const double pref = std::sqrt(2.0 * kT * dt);
   for (std::size_t i = 0; i < a.size(); ++i) {
     const double D = 1.0 / (6.0 * kPi * mu_ * a[i]);
-    for (int k = 0; k < 3; ++k) dx[i][k] = pref * std::sqrt(D) * gauss(rng);
+    for (int k = 0; k < 3; ++k) dx[i][k] = pref * std::sqrt(D) * rng.normal();
   }
   return dx;
 }

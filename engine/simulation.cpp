@@ -14,6 +14,12 @@
 
 namespace stokesian {
 
+namespace {
+// Stored as State::rng_state: the noise needs no saved state, only the seed and the step
+// (checkpoints of 0.1.0 hold a Mersenne-Twister state here instead; see run()).
+const char* const kNoiseStreams = "philox4x32-10 streams (seed, brownian, step)";
+}  // namespace
+
 Simulation::Simulation(Scene scene)
     : scene_(std::move(scene)),
       model_(resolve_model(scene_)),
@@ -30,10 +36,7 @@ State Simulation::initial_state() const {
   s.fixed = scene_.fixed;
   s.domain = scene_.domain;
   s.dt = scene_.time.dt;
-  Rng rng(scene_.seed);
-  std::ostringstream o;
-  o << rng;
-  s.rng_state = o.str();
+  s.rng_state = kNoiseStreams;
   return s;
 }
 
@@ -95,7 +98,11 @@ void Simulation::check_finite(const State& s) const {
     }
 }
 
-void Simulation::advance(State& s, const Evaluation& ev, Rng& rng) {
+void Simulation::advance(State& s, const Evaluation& ev) {
+  // The noise of step n is stream (brownian, n): the same on every machine and thread count, and
+  // independent of where a run was interrupted and resumed.
+  Rng rng = legacy_noise_ ? RandomStream::continuing_legacy(*legacy_noise_)
+                          : RandomStream::for_purpose(scene_.seed, Purpose::brownian, std::uint64_t(s.step));
   StepResult r = integrator_->step(s, ev, *this, rng);
   s.position = std::move(r.x);
   s.time += r.dt_used;
@@ -130,10 +137,13 @@ Frame Simulation::frame(const State& s, const Evaluation& ev) const {
 }
 
 long Simulation::run(State& s, OutputSink& out, const RunControl& control) {
-  Rng rng;
-  {
+  legacy_noise_.reset();
+  if (!s.rng_state.empty() && s.rng_state != kNoiseStreams) {  // a checkpoint of 0.1.0
     std::istringstream in(s.rng_state);
-    in >> rng;
+    std::mt19937_64 engine;
+    in >> engine;
+    if (!in) throw PhysicsError("checkpoint holds an unknown random-number state: " + s.rng_state.substr(0, 60));
+    legacy_noise_ = engine;
   }
   const long last = scene_.time.steps;
   const std::int64_t every = scene_.output.every;
@@ -164,9 +174,13 @@ long Simulation::run(State& s, OutputSink& out, const RunControl& control) {
     const bool at_end = s.step >= last || (control.max_steps >= 0 && taken >= control.max_steps);
     const long ce = scene_.output.checkpoint_every;
     if (at_end || (ce > 0 && s.step % ce == 0 && s.step > 0)) {
-      std::ostringstream o;
-      o << rng;
-      s.rng_state = o.str();
+      if (legacy_noise_) {
+        std::ostringstream o;
+        o << *legacy_noise_;
+        s.rng_state = o.str();
+      } else {
+        s.rng_state = kNoiseStreams;
+      }
       out.checkpoint(s);
     }
     // Progress of the step reached, with the latest frame's diagnostics; the last step's line is
@@ -175,7 +189,7 @@ long Simulation::run(State& s, OutputSink& out, const RunControl& control) {
     if (taken > 0)
       progress.update(long(s.step), s.time, have_latest, have_latest ? latest.scalar("min_gap") : 0.0,
                       have_latest ? latest.scalar("overlaps") : 0.0);
-    advance(s, ev, rng);
+    advance(s, ev);
     ++taken;
   }
   progress.finish(long(s.step), s.time, have_latest, have_latest ? latest.scalar("min_gap") : 0.0,

@@ -14,6 +14,8 @@
 #include "engine/observers.hpp"
 
 #include <memory>
+#include <optional>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -51,7 +53,7 @@ class Simulation final : public Dynamics {
   RunHeader header() const;
 
   // Advance s by one (accepted) step; ev is the evaluation at s.position.
-  void advance(State& s, const Evaluation& ev, Rng& rng);
+  void advance(State& s, const Evaluation& ev);
 
   // Steps s to the scene's last step, recording every output step and checkpointing; returns the
   // number of steps taken by this call.
@@ -71,6 +73,7 @@ class Simulation final : public Dynamics {
   std::vector<std::unique_ptr<Observer>> observers_;
   TaskGraph::Mode task_mode_ = TaskGraph::Mode::automatic;
   PhaseTimes phases_;
+  std::optional<std::mt19937_64> legacy_noise_;  // set while continuing a run of 0.1.0 (see run())
 };
 
 }  // namespace stokesian

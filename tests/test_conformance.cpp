@@ -359,7 +359,7 @@ TEST_CASE("every solver that samples Brownian motion: displacements of covarianc
       MatX Mtt(9, 9);
       for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j) Mtt.block<3, 3>(3 * i, 3 * j) = M.block<3, 3>(d * i, d * j);
-      Rng rng(61);
+      Rng rng(61, 0);
       MatX C = MatX::Zero(9, 9);
       const int draws = 3000;
       for (int k = 0; k < draws; ++k) {

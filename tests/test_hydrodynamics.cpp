@@ -165,7 +165,7 @@ TEST_CASE("free-draining Brownian displacements have variance 2 D dt (seeded, 5-
   // Sample variance of n = 3 * 20000 normal draws has relative standard error sqrt(2/n) ~ 0.0058;
   // 5 sigma = 0.029 makes a false failure essentially impossible for this fixed seed and any other.
   Hydrodynamics h(model(HydroModel::free_draining, Moments::F), 2.0, AmbientFlow{}, 1e-8);
-  std::mt19937_64 rng(1234);
+  Rng rng(1234, 0);
   const double a = 0.5, kT = 1.7, dt = 0.01;
   double sum2 = 0;
   const int reps = 20000;
@@ -196,7 +196,7 @@ TEST_CASE("fluctuation-dissipation: far-field Brownian displacements have covari
     Hydrodynamics h(m, 1.0, AmbientFlow{}, 1e-8);
     const double kT = 1.0, dt = 0.5;
     const int n = 20000;
-    std::mt19937_64 rng(77);
+    Rng rng(77, 0);
     Eigen::Matrix<double, 9, 9> C = Eigen::Matrix<double, 9, 9>::Zero();
     for (int s = 0; s < n; ++s) {
       const auto d = h.brownian_displacement(x, a, kT, dt, rng, dom);

@@ -29,7 +29,6 @@ double measured_period(double edge, const char* moments, double t_end) {
        << "[time]\ndt = 1.0\nsteps = 100000\nintegrator = \"rkf45\"\nrkf_tolerance = 1e-8\n";
   Simulation sim(io::parse_scene(toml.str(), "cube.toml"));
   State s = sim.initial_state();
-  std::mt19937_64 rng(1);
   const double U0 = 1.0 / (6.0 * M_PI);
   std::vector<double> spread, time;
   while (s.time * U0 < t_end) {
@@ -40,7 +39,7 @@ double measured_period(double edge, const char* moments, double t_end) {
     }
     spread.push_back(zmax - zmin);
     time.push_back(s.time * U0);
-    sim.advance(s, sim.evaluate(s, s.position), rng);
+    sim.advance(s, sim.evaluate(s, s.position));
     s.dt = std::min(s.dt, 5.0);  // resolve the planar events to 0.3 a/U0
   }
   std::vector<double> events;

@@ -17,7 +17,6 @@ struct Outcome {
 Outcome run_steps(const std::string& toml, int steps) {
   Simulation sim(io::parse_scene(toml, "stability.toml"));
   State s = sim.initial_state();
-  std::mt19937_64 rng(5);
   Outcome o;
   for (int k = 0; k < steps; ++k) {
     const Evaluation ev = sim.evaluate(s, s.position);
@@ -25,7 +24,7 @@ Outcome run_steps(const std::string& toml, int steps) {
     const Frame f = sim.frame(s, ev);
     o.min_gap = std::min(o.min_gap, f.scalar("min_gap"));
     o.max_overlaps = std::max(o.max_overlaps, long(f.scalar("overlaps")));
-    sim.advance(s, ev, rng);
+    sim.advance(s, ev);
   }
   return o;
 }

@@ -1,8 +1,9 @@
 #pragma once
 // Basic types shared by every layer of the engine.
 #include <Eigen/Dense>
+#include "engine/core/random.hpp"
+
 #include <cstddef>
-#include <random>
 #include <vector>
 
 namespace stokesian {
@@ -11,7 +12,7 @@ using Vec3 = Eigen::Vector3d;
 using Mat3 = Eigen::Matrix3d;
 using VecX = Eigen::VectorXd;
 using MatX = Eigen::MatrixXd;
-using Rng = std::mt19937_64;  // the one random-number engine (serialised in checkpoints)
+using Rng = RandomStream;  // counter-based: a draw depends only on (seed, stream, index) (core/random.hpp)
 
 constexpr double kPi = 3.14159265358979323846;
 
