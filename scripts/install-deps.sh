@@ -8,5 +8,5 @@ if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 $SUDO apt-get update -qq
 DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends \
   ca-certificates git cmake make g++ pkg-config \
-  libeigen3-dev libfftw3-dev libsuitesparse-dev libopenblas0-openmp libhdf5-dev libtomlplusplus-dev doctest-dev libcli11-dev \
+  libeigen3-dev libfftw3-dev libsuitesparse-dev libopenblas0-openmp libhdf5-dev libtomlplusplus-dev doctest-dev libcli11-dev librandom123-dev \
   python3 python3-numpy python3-matplotlib python3-h5py python3-mdanalysis >/dev/null
