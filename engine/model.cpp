@@ -203,8 +203,12 @@ ResolvedModel resolve_model(const Scene& s) {
                   "Brownian motion with rigid-particle stresslets (FTS) needs a Stokesian-dynamics Brownian solver, "
                   "which no solver provides; use moments = \"FT\" or kT = 0");
     if (m.brownian && m.fixed_particles)
-      unavailable(s, "hydrodynamics", "model", "Brownian motion with fixed particles needs a constrained Brownian "
-                                               "solver, which no solver provides");
+      unavailable(s, "hydrodynamics", "model",
+                  "Brownian motion with fixed particles needs a constrained Brownian solver (noise and drift of the "
+                  "mobile particles given the fixed ones), which this version does not have. What works instead: "
+                  "kT = 0 with the fixed particles (deterministic constrained dynamics, any model), or "
+                  "model = \"free_draining\" with kT > 0 (fixed particles held, no hydrodynamic coupling), or "
+                  "kT > 0 without fixed particles (far_field)");
   }
 
   // Integrator.

@@ -32,19 +32,19 @@ Registry<ParticleOutputEntry> make_particle_outputs() {
   Registry<ParticleOutputEntry> r("per-particle output");
   auto always = [](const ResolvedModel&) { return true; };
   auto rotations = [](const ResolvedModel& m) { return has_torque(m.moments); };
-  r.add({"velocity", {"velocity", {3}, {}, units::velocity}, always,
+  r.add({"velocity", {"velocity", {3}, {}, units::velocity}, always, "",
          [](const State&, const Evaluation& ev, Frame& f) { f.set_particles("velocity", ev.hydro.U); }});
-  r.add({"angular_velocity", {"angular_velocity", {3}, {}, units::angular_velocity}, rotations,
+  r.add({"angular_velocity", {"angular_velocity", {3}, {}, units::angular_velocity}, rotations, "moments = \"FT\" or \"FTS\"",
          [](const State&, const Evaluation& ev, Frame& f) { f.set_particles("angular_velocity", ev.hydro.Omega); }});
-  r.add({"force", {"force", {3}, {}, units::force}, always, [](const State& s, const Evaluation& ev, Frame& f) {
+  r.add({"force", {"force", {3}, {}, units::force}, always, "", [](const State& s, const Evaluation& ev, Frame& f) {
            std::vector<Vec3> F = ev.force;
            for (std::size_t i = 0; i < s.size(); ++i)
              if (!s.fixed.empty() && s.fixed[i]) F[i] = ev.hydro.F[i];  // holding force of fixed particles
            f.set_particles("force", F);
          }});
-  r.add({"torque", {"torque", {3}, {}, units::energy}, rotations,
+  r.add({"torque", {"torque", {3}, {}, units::energy}, rotations, "moments = \"FT\" or \"FTS\"",
          [](const State&, const Evaluation& ev, Frame& f) { f.set_particles("torque", ev.torque); }});
-  r.add({"stresslet", {"stresslet", {6}, kSymmetricComponents, units::energy}, [](const ResolvedModel& m) { return has_stresslet(m.moments); },
+  r.add({"stresslet", {"stresslet", {6}, kSymmetricComponents, units::energy}, [](const ResolvedModel& m) { return has_stresslet(m.moments); }, "moments = \"FTS\"",
          [](const State&, const Evaluation& ev, Frame& f) {
            f.particles["stresslet"] = Field{{6}, six_per_particle(ev.hydro.S), units::energy, false};
          }});
@@ -126,12 +126,21 @@ std::vector<std::unique_ptr<Observer>> make_observers(const Scene& scene, const 
   std::vector<std::unique_ptr<Observer>> obs;
   obs.push_back(std::make_unique<Positions>());
   if (scene.domain.periodic()) obs.push_back(std::make_unique<Images>());
-  for (const auto& name : scene.output.record)
-    if (!particle_outputs().find(name))
-      throw ConfigError(scene.where("output", "record") + ": \"" + name + "\" is not one of " +
-                        quoted_list(particle_outputs().names()));
+  const auto& rec = scene.output.record;
+  const bool all = rec.size() == 1 && rec[0] == "all";
+  if (!all)
+    for (const auto& name : rec) {
+      const ParticleOutputEntry* e = particle_outputs().find(name);
+      if (!e)
+        throw ConfigError(scene.where("output", "record") + ": \"" + name + "\" is not one of " +
+                          quoted_list(particle_outputs().names()) + " (or \"all\")");
+      if (!e->available(model))
+        throw ConfigError(scene.where("output", "record") + ": \"" + name + "\" needs " + e->needs +
+                          ", but this scene resolves to moments = \"" + name_of(model.moments) +
+                          "\" (see `stokesian check`); set [hydrodynamics] moments or leave " + name + " out");
+    }
   for (const auto& e : particle_outputs().entries())
-    if (std::count(scene.output.record.begin(), scene.output.record.end(), e.name) && e.available(model))
+    if ((all || std::count(rec.begin(), rec.end(), e.name)) && e.available(model))
       obs.push_back(std::make_unique<RecordedOutput>(e));
   if (has_stresslet(model.moments)) obs.push_back(std::make_unique<StressletSum>());
   obs.push_back(std::make_unique<Gaps>());

@@ -40,6 +40,7 @@ struct ParticleOutputEntry {
   std::string name;
   FieldSpec spec;
   std::function<bool(const ResolvedModel&)> available;  // the model computes it
+  std::string needs;                                    // what `available` asks of the model, for messages
   std::function<void(const State&, const Evaluation&, Frame&)> fill;
 };
 const Registry<ParticleOutputEntry>& particle_outputs();

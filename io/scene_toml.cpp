@@ -166,10 +166,13 @@ const toml::table& sub(const Reader& r, const toml::table& root, const std::stri
 void read_particles(const Reader& R, const toml::table& t, Scene& s, const std::string& base_dir) {
   const std::string T = "particles";
   R.only(t, T, {"positions", "radii", "radius", "file", "generate", "count", "volume_fraction", "size_distribution",
-                "radius_ratio", "large_fraction", "sigma", "seed", "fixed"});
+                "radius_ratio", "large_fraction", "sigma", "seed", "fixed", "region", "equilibration_sweeps", "min_gap"});
   const bool has_pos = t.contains("positions"), has_file = t.contains("file"), has_gen = t.contains("generate");
   if (int(has_pos) + int(has_file) + int(has_gen) != 1)
     R.fail(&t, "[particles]", "give exactly one of positions, file, generate");
+  for (const char* key : {"region", "equilibration_sweeps", "min_gap"})
+    if (!has_gen && t.contains(key))
+      R.fail(t.get(key), std::string("[particles] ") + key, "only meaningful with generate");
   if (has_pos) {
     const toml::array* a = t.get("positions")->as_array();
     if (!a || a->empty()) R.fail(t.get("positions"), "[particles] positions", "expected a non-empty list of [x, y, z]");
@@ -222,6 +225,14 @@ void read_particles(const Reader& R, const toml::table& t, Scene& s, const std::
     p.large_fraction = R.number(t, T, "large_fraction", 0.5, 0.0, 1.0);
     p.sigma = R.number(t, T, "sigma", 0.2, 0.0, 2.0);
     p.seed = std::uint64_t(R.integer(t, T, "seed", 1, 0, std::numeric_limits<long>::max()));
+    p.min_gap = R.number(t, T, "min_gap", p.min_gap, 0.0, 1.0);
+    if (t.contains("equilibration_sweeps") && p.pattern != PlacementParams::Pattern::random)
+      R.fail(t.get("equilibration_sweeps"), "[particles] equilibration_sweeps", "only meaningful with generate = \"random\"");
+    p.equilibration_sweeps = R.integer(t, T, "equilibration_sweeps", p.equilibration_sweeps, 0, 1000000);
+    if (t.contains("region") && s.domain.periodic())
+      R.fail(t.get("region"), "[particles] region", "only meaningful in an open domain (a periodic box is filled whole)");
+    p.region = R.choice(t, T, "region", "sphere", {"sphere", "cube"}) == "cube" ? PlacementParams::Region::cube
+                                                                             : PlacementParams::Region::sphere;
     // Open domains: count is required and volume_fraction sets the filled region. Periodic boxes:
     // the box fixes the volume, so give count or volume_fraction, not both.
     if (s.domain.periodic()) {
@@ -343,7 +354,7 @@ Scene parse_scene(const toml::table& root, const std::string& source) {
   read_particles(R, sub(R, root, "particles"), s, dir_of(source));
 
   const toml::table& fo = sub(R, root, "forces");
-  R.only(fo, "forces", {"external_force", "external_torque", "pair"});
+  R.only(fo, "forces", {"external_force", "external_torque", "pair", "gravity"});
   s.forces.external_force = R.vec3_list(fo, "forces", "external_force");
   s.forces.external_torque = R.vec3_list(fo, "forces", "external_torque");
   for (const auto* key : {"external_force", "external_torque"}) {
@@ -353,6 +364,19 @@ Scene parse_scene(const toml::table& root, const std::string& source) {
       o << "has " << v.size() << " vectors for " << s.positions.size() << " particles (give 1 or one per particle)";
       R.fail(fo.get(key), std::string("[forces] ") + key, o.str());
     }
+  }
+  // gravity: the force on a sphere of radius 1 a; particle i gets gravity * a_i^3, added to its
+  // external_force (the sum is stored per particle, so the resolved scene lists it explicitly).
+  if (const toml::node* gn = R.get(fo, "forces", "gravity")) {
+    const Vec3 g = R.vec3(*gn, "[forces] gravity");
+    std::vector<Vec3> f(s.positions.size());
+    for (std::size_t i = 0; i < f.size(); ++i) {
+      const Vec3 base = s.forces.external_force.empty() ? Vec3::Zero()
+                        : s.forces.external_force.size() == 1 ? s.forces.external_force[0]
+                                                              : s.forces.external_force[i];
+      f[i] = base + g * (s.radii[i] * s.radii[i] * s.radii[i]);
+    }
+    s.forces.external_force = f;
   }
   if (const toml::node* pn = fo.get("pair")) {
     const toml::array* arr = pn->as_array();
@@ -423,6 +447,9 @@ Scene parse_scene(const toml::table& root, const std::string& source) {
       names.insert(*v);
     }
     s.output.record.assign(names.begin(), names.end());
+    if (names.count("all") && names.size() > 1)
+      R.fail(rn, "[output] record", "\"all\" stands alone (it means every output the model computes)");
+    if (s.output.record == kEveryParticleOutput) s.output.record = {"all"};
   }
 
   // Consistency checks across tables.

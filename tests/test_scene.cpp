@@ -4,6 +4,7 @@
 
 #include "engine/core/errors.hpp"
 #include "engine/model.hpp"
+#include "engine/observers.hpp"
 #include "io/scene_toml.hpp"
 
 #include <cstdlib>
@@ -176,4 +177,46 @@ TEST_CASE("the resolved scene is complete: re-parsing it gives the same scene, b
   CHECK(b.forces.pair.size() == 2);
   CHECK(b.time.integrator == "midpoint");
   CHECK(b.flow.rate == 0.3);
+}
+
+TEST_CASE("a recorded quantity the model does not compute is refused, naming the moments it needs") {
+  const std::string sheared = "[domain]\nkind = \"periodic\"\nbox = [10, 10, 10]\n[fluid]\nkT = 1.0\n" + kTwo +
+                              "[flow]\nkind = \"simple_shear\"\nrate = 0.1\n[hydrodynamics]\nmodel = \"far_field\"\n"
+                              "moments = \"FT\"\n";
+  auto observers_error = [](const std::string& text) -> std::string {
+    try {
+      const Scene s = io::parse_scene(text, "rec.toml");
+      make_observers(s, resolve_model(s));
+    } catch (const ConfigError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  // Earlier versions ran this scene and silently wrote no stresslet.
+  const std::string e = observers_error(sheared + "[output]\nrecord = [\"stresslet\"]\n");
+  CHECK(contains(e, "[output] record"));
+  CHECK(contains(e, "\"stresslet\" needs moments = \"FTS\""));
+  CHECK(contains(e, "resolves to moments = \"FT\""));
+  CHECK(contains(observers_error(kTwo + "[hydrodynamics]\nmoments = \"F\"\n[output]\nrecord = [\"torque\"]\n"),
+                 "\"torque\" needs moments = \"FT\" or \"FTS\""));
+  // What the model computes is accepted; "all" (the default) takes whatever the model computes.
+  CHECK(observers_error(sheared + "[output]\nrecord = [\"velocity\", \"angular_velocity\"]\n").empty());
+  CHECK(observers_error(sheared).empty());
+  CHECK(io::parse_scene(kTwo, "a.toml").output.record == std::vector<std::string>{"all"});
+  CHECK(contains(error_of(kTwo + "[output]\nrecord = [\"all\", \"force\"]\n"), "\"all\" stands alone"));
+  // 0.1.0 wrote its default as the full list: read back as "all", so its runs resume unchanged.
+  const Scene old = io::parse_scene(kTwo + "[output]\nrecord = [\"velocity\", \"torque\", \"stresslet\", \"force\", "
+                                           "\"angular_velocity\"]\n", "old.toml");
+  CHECK(old.output.record == std::vector<std::string>{"all"});
+}
+
+TEST_CASE("Brownian motion with fixed particles is refused with what works instead, and each alternative resolves") {
+  const std::string fixed = "[particles]\npositions = [[0,0,0],[3,0,0],[6,0,0]]\nfixed = [true, false, false]\n";
+  const std::string e = error_of(fixed + "[fluid]\nkT = 1.0\n");
+  CHECK(contains(e, "[hydrodynamics] model"));
+  CHECK(contains(e, "What works instead"));
+  CHECK(error_of(fixed + "[fluid]\nkT = 0.0\n").empty());
+  CHECK(error_of(fixed + "[fluid]\nkT = 0.0\n[hydrodynamics]\nmodel = \"stokesian\"\n").empty());
+  CHECK(error_of(fixed + "[fluid]\nkT = 1.0\n[hydrodynamics]\nmodel = \"free_draining\"\n").empty());
+  CHECK(error_of("[particles]\npositions = [[0,0,0],[3,0,0],[6,0,0]]\n[fluid]\nkT = 1.0\n").empty());
 }

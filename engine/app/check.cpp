@@ -353,7 +353,7 @@ int check(Simulation& sim, const CheckOptions& opt, std::FILE* out) {
   // Outputs.
   const long long frames = s.time.steps / s.output.every + 1;
   std::string rec;
-  for (const auto& r : s.output.record) rec += (rec.empty() ? "" : ", ") + r;
+  for (const auto& r : s.output.record) rec += (rec.empty() ? "" : ", ") + (r == "all" ? std::string("all the model computes") : r);
   std::fprintf(out, "output:\n  trajectory: %s, a frame every %lld steps (%lld frames); per particle: position, radius%s%s\n",
                opt.out.c_str(), static_cast<long long>(s.output.every), frames, rec.empty() ? "" : ", ", rec.c_str());
   std::fprintf(out, "    (outputs the model does not compute are not written)\n");

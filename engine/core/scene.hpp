@@ -114,13 +114,16 @@ struct TimeParams {
   double rkf_tolerance = 1e-6;  // local error per step for rkf45 [a]
 };
 
+// Every per-particle output; 0.1.0 wrote this list for its default, read back as {"all"}.
+inline const std::vector<std::string> kEveryParticleOutput{"angular_velocity", "force", "stresslet", "torque", "velocity"};
+
 struct OutputParams {
   std::int64_t every = 1;              // frames every N steps
   std::int64_t checkpoint_every = 0;   // checkpoint every N steps; 0 = at the end only
-  // Optional per-particle outputs (registered in engine/observers.cpp), sorted, no repeats. The
-  // default is the standard kinematic set; an output the resolved model does not compute (e.g.
-  // stresslet below FTS) is not written.
-  std::vector<std::string> record{"angular_velocity", "force", "stresslet", "torque", "velocity"};
+  // Optional per-particle outputs (registered in engine/observers.cpp), sorted, no repeats.
+  // {"all"} (the default) = every one the resolved model computes; named outputs must be computed
+  // by the model, or the scene is refused (a stresslet needs FTS, angular ones FT).
+  std::vector<std::string> record{"all"};
   // Extended-XYZ export (docs/output.md): off, or on at xyz_path relative to the folder of the
   // trajectory (--out); an empty xyz_path means <trajectory stem>.xyz beside the trajectory.
   bool xyz = false;
