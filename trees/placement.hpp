@@ -1,11 +1,36 @@
 #pragma once
-// Initial configurations generated from a target volume fraction.
-//   random:  uniform random centres, then overlaps removed by sweeps of pairwise separation along
-//            the lines of centres (cell-list neighbour search, O(N) per sweep); reaches phi ~ 0.6.
-//   lattice: simple cubic lattice of spacing (4 pi a_mean^3 / (3 phi))^(1/3) (radii may still
-//            differ; overlapping draws are rejected).
-// Radii: monodisperse a; bidisperse a and ratio*a with number fraction f of the large ones;
-// lognormal with median a and log standard deviation sigma.
+// Initial configurations generated from a target volume fraction (docs/configurations.md).
+//
+// Radii (drawn first, stream (placement, 0)):
+//   monodisperse  a_i = radius
+//   bidisperse    a_i = radius (small species) or radius_ratio * radius (large species); exactly
+//                 round(large_fraction * count) large ones, at random indices
+//   lognormal     a_i = exp(ln(radius) + sigma * z_i), z_i standard normal: radius is the median
+//
+// Hard core: two particles may not come closer than a_i + a_j + min_gap (surface gap >= min_gap);
+// in an open domain a particle stays inside the region (|x_i| <= R - a_i for the sphere of radius
+// R, x_i within a_i of no face for the cube). The region's volume is sum (4/3) pi a_i^3 / phi.
+//
+// random:  (1) random sequential addition (RSA [F80]): particles in decreasing size, each at
+//              uniform random trial positions until it overlaps nobody. With equilibration_sweeps
+//              = 0 this is the result (RSA jams at phi ~ 0.38 [F80]; refused above 0.35).
+//          (2) otherwise RSA is run with all radii scaled by lambda0 = min(1, (0.25/phi)^(1/3)),
+//              then hard-sphere Metropolis Monte Carlo [M53] sweeps (N single-particle trial
+//              displacements, uniform in a cube, rejected on overlap) alternate with growth
+//              passes in which each particle grows its own scale s_i towards 1 by half of the room
+//              its neighbours leave (to 1 at once when there is room), a Monte Carlo version of
+//              the Lubachevsky–Stillinger compression [LS90]; once every s_i = 1, equilibration_
+//              sweeps further sweeps at the target size equilibrate the hard-sphere fluid.
+//              Sweep k uses the counter-based stream (equilibration, k).
+// lattice: simple cubic lattice of spacing (V_region / count)^(1/3) (open sphere: the count
+//          sites nearest the centre); a site whose particle would overlap is an error.
+//
+// Every step is O(N) per sweep: a uniform cell grid in which each particle is registered in every
+// cell its bounding cube touches (exact for any size ratio; work ~ N + V / h^3).
+//
+// [F80] Feder, J. Theor. Biol. 87, 237 (1980) — RSA jamming coverage.
+// [M53] Metropolis, Rosenbluth, Rosenbluth, Teller & Teller, J. Chem. Phys. 21, 1087 (1953).
+// [LS90] Lubachevsky & Stillinger, J. Stat. Phys. 60, 561 (1990).
 #include "engine/core/types.hpp"
 
 #include <cstdint>
@@ -17,23 +42,32 @@ namespace stokesian {
 struct PlacementParams {
   enum class Pattern { random, lattice } pattern = Pattern::random;
   enum class Sizes { monodisperse, bidisperse, lognormal } sizes = Sizes::monodisperse;
+  enum class Region { sphere, cube } region = Region::sphere;  // open domains only
   long count = 0;               // number of particles
-  double volume_fraction = 0.1; // phi = sum (4/3) pi a^3 / V
-  double radius = 1.0;          // a (median for lognormal) [a]
+  double volume_fraction = 0.1; // open domains: phi = sum (4/3) pi a^3 / V_region (periodic: unused)
+  double radius = 1.0;          // monodisperse: a; bidisperse: small radius; lognormal: median [a]
   double radius_ratio = 2.0;    // bidisperse: large / small radius
   double large_fraction = 0.5;  // bidisperse: number fraction of large particles
   double sigma = 0.2;           // lognormal: standard deviation of ln a
+  double min_gap = 1e-3;        // hard-core margin: surface gaps >= min_gap [a]
+  long equilibration_sweeps = 100;  // random: Monte Carlo sweeps at the target size (0 = plain RSA)
   std::uint64_t seed = 1;
 };
+
+// Plain RSA is refused above this volume fraction: it jams at ~0.38 [F80], and beyond ~0.35 the
+// last particles need millions of attempts each.
+inline constexpr double kRsaMaxVolumeFraction = 0.35;
 
 struct Placement {
   std::vector<Vec3> position;
   std::vector<double> radius;
-  Vec3 box;  // the region filled: the periodic box, or the cube used for open domains
+  Vec3 box;                    // the periodic box, or the bounding cube of the open region
+  double sphere_radius = 0.0;  // open sphere region: its radius R (centre at the origin); else 0
+  long growth_sweeps = 0;      // random: Monte Carlo sweeps spent growing the particles to full size
 };
 
-// box: the periodic box, or a zero vector for open domains (a cube of the right volume centred at
-// the origin is used). Throws std::invalid_argument with a message on impossible requests.
+// box: the periodic box, or a zero vector for open domains (region centred at the origin).
+// Throws std::invalid_argument with a message on impossible requests.
 Placement place_particles(const PlacementParams& p, const Vec3& box);
 
 }  // namespace stokesian
