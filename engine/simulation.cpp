@@ -36,6 +36,8 @@ State Simulation::initial_state() const {
   s.fixed = scene_.fixed;
   s.domain = scene_.domain;
   s.dt = scene_.time.dt;
+  s.step = scene_.time.start_step;
+  s.time = scene_.time.start_time;
   s.rng_state = kNoiseStreams;
   return s;
 }
@@ -136,6 +138,10 @@ Frame Simulation::frame(const State& s, const Evaluation& ev) const {
   return f;
 }
 
+bool Simulation::frame_step(std::int64_t step) const {
+  return (step - scene_.time.start_step) % scene_.output.every == 0 || step == scene_.time.last_step();
+}
+
 long Simulation::run(State& s, OutputSink& out, const RunControl& control) {
   legacy_noise_.reset();
   if (!s.rng_state.empty() && s.rng_state != kNoiseStreams) {  // a checkpoint of 0.1.0
@@ -145,8 +151,7 @@ long Simulation::run(State& s, OutputSink& out, const RunControl& control) {
     if (!in) throw PhysicsError("checkpoint holds an unknown random-number state: " + s.rng_state.substr(0, 60));
     legacy_noise_ = engine;
   }
-  const long last = scene_.time.steps;
-  const std::int64_t every = scene_.output.every;
+  const long last = long(scene_.time.last_step());
   progress::Progress progress(long(s.step), last, control.quiet);
   bool frame_done = control.frame_done;
   long taken = 0;
@@ -154,7 +159,7 @@ long Simulation::run(State& s, OutputSink& out, const RunControl& control) {
   bool have_latest = false;
   double max_overlaps = 0;
   for (;;) {
-    const bool output_step = !frame_done && s.step % every == 0;
+    const bool output_step = !frame_done && frame_step(s.step);
     const Evaluation ev = evaluate(s, s.position, 0.0, output_step);
     if (output_step) {
       Frame f = frame(s, ev);
@@ -173,7 +178,8 @@ long Simulation::run(State& s, OutputSink& out, const RunControl& control) {
     frame_done = false;
     const bool at_end = s.step >= last || (control.max_steps >= 0 && taken >= control.max_steps);
     const long ce = scene_.output.checkpoint_every;
-    if (at_end || (ce > 0 && s.step % ce == 0 && s.step > 0)) {
+    const std::int64_t since = s.step - scene_.time.start_step;
+    if (at_end || (ce > 0 && since % ce == 0 && since > 0)) {
       if (legacy_noise_) {
         std::ostringstream o;
         o << *legacy_noise_;

@@ -945,6 +945,27 @@ Snapshot read_last_frame(const std::string& path) {
   if (steps.empty() || times.empty()) throw IoError(path + ": /particles/all/position has no step/time entries");
   s.step = steps.back();
   s.time = times.back();
+  {
+    H box = open_group(f, "/particles/all/box", path);
+    H b = open_attr(box, "boundary", "particles/all/box", path);
+    const auto bnd = read_strings(b, true, "box boundary", path);
+    s.periodic = !bnd.empty() && bnd[0] == "periodic";
+    if (s.periodic) {
+      H5O_info_t oi;
+      if (H5Oget_info_by_name(box, "edges", &oi, H5P_DEFAULT) < 0) fail(path, "cannot inspect box/edges");
+      if (oi.type == H5O_TYPE_GROUP) {  // edges per frame: rows a = (Lx,0,0), b = (strain Ly, Ly, 0), c = (0,0,Lz)
+        std::vector<double> e;
+        last_row("/particles/all/box/edges/value", 3, e);
+        if (e.size() != 9) throw IoError(path + ": box/edges/value is not 3 x 3 per frame");
+        s.box = Vec3(e[0], e[4], e[8]);
+        s.shear_strain = e[3] / e[4];
+      } else {  // one fixed edges vector (unsheared boxes in files of 0.1.0)
+        const auto e = read_vector<double>(f, "/particles/all/box/edges", H5T_NATIVE_DOUBLE, path);
+        if (e.size() != 3) throw IoError(path + ": box/edges does not hold 3 lengths");
+        s.box = Vec3(e[0], e[1], e[2]);
+      }
+    }
+  }
   return s;
 }
 

@@ -105,6 +105,9 @@ struct Snapshot {
   double time = 0.0;
   std::vector<Vec3> position;
   std::vector<double> radius;
+  bool periodic = false;     // the run's box (last frame): edge lengths and Lees-Edwards strain
+  Vec3 box = Vec3::Zero();
+  double shear_strain = 0.0;
 };
 Snapshot read_last_frame(const std::string& path);
 

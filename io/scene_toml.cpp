@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -163,7 +164,9 @@ const toml::table& sub(const Reader& r, const toml::table& root, const std::stri
   return *n->as_table();
 }
 
-void read_particles(const Reader& R, const toml::table& t, Scene& s, const std::string& base_dir) {
+// from_run: set when the particles come from a trajectory (its last frame continues that run).
+void read_particles(const Reader& R, const toml::table& t, Scene& s, const std::string& base_dir,
+                    std::optional<Snapshot>& from_run) {
   const std::string T = "particles";
   R.only(t, T, {"positions", "radii", "radius", "file", "generate", "count", "volume_fraction", "size_distribution",
                 "radius_ratio", "large_fraction", "sigma", "seed", "fixed", "region", "equilibration_sweeps", "min_gap"});
@@ -202,6 +205,7 @@ void read_particles(const Reader& R, const toml::table& t, Scene& s, const std::
         const auto f = read_last_frame(path);
         s.positions = f.position;
         s.radii = f.radius;
+        from_run = f;
       } else {
         const auto frames = read_xyz(path);
         if (frames.empty()) throw std::runtime_error(path + ": no frames");
@@ -351,7 +355,25 @@ Scene parse_scene(const toml::table& root, const std::string& source) {
   s.fluid.kT = R.number(fl, "fluid", "kT", 0.0, 0.0, 1e12);
 
   if (!root.contains("particles")) R.fail(&root, "[particles]", "required table is missing");
-  read_particles(R, sub(R, root, "particles"), s, dir_of(source));
+  std::optional<Snapshot> from_run;
+  read_particles(R, sub(R, root, "particles"), s, dir_of(source), from_run);
+  if (from_run) {
+    // Continuing a run: its box and lattice strain come with its positions.
+    const toml::node* file = sub(R, root, "particles").get("file");
+    std::ostringstream box;
+    box << "[" << from_run->box.x() << ", " << from_run->box.y() << ", " << from_run->box.z() << "]";
+    if (from_run->periodic && !s.domain.periodic())
+      R.fail(file, "[particles] file", "holds a run in the periodic box " + box.str() +
+                                           "; an open domain would drop its periodic images: set [domain] kind = "
+                                           "\"periodic\" and box = " + box.str() + " to continue it");
+    if (from_run->periodic && ((s.domain.box - from_run->box).cwiseAbs().maxCoeff() > 1e-12 * from_run->box.maxCoeff())) {
+      std::ostringstream o;
+      o << "holds a run in the box " << box.str() << ", but [domain] box is [" << s.domain.box.x() << ", "
+        << s.domain.box.y() << ", " << s.domain.box.z() << "]: its positions belong to its own box";
+      R.fail(file, "[particles] file", o.str());
+    }
+    if (from_run->periodic && !dom.contains("shear_strain")) s.domain.shear_strain = from_run->shear_strain;
+  }
 
   const toml::table& fo = sub(R, root, "forces");
   R.only(fo, "forces", {"external_force", "external_torque", "pair", "gravity"});
@@ -410,9 +432,16 @@ Scene parse_scene(const toml::table& root, const std::string& source) {
   s.seed = std::uint64_t(R.integer(br, "brownian", "seed", 1, 0, std::numeric_limits<long>::max()));
 
   const toml::table& ti = sub(R, root, "time");
-  R.only(ti, "time", {"dt", "steps", "integrator", "rkf_tolerance"});
+  R.only(ti, "time", {"dt", "steps", "integrator", "rkf_tolerance", "start_step", "start_time"});
   s.time.dt = R.number(ti, "time", "dt", 1e-3, 0.0, 1e12, true);
   s.time.steps = R.integer(ti, "time", "steps", 0, 0, std::numeric_limits<long>::max());
+  // A continued run counts on from the file's last frame (so its noise streams, keyed by step, do
+  // not repeat); steps are the steps taken in this run.
+  s.time.start_step = R.integer(ti, "time", "start_step", from_run ? long(from_run->step) : 0, 0,
+                                std::numeric_limits<long>::max() / 2);
+  s.time.start_time = R.number(ti, "time", "start_time", from_run ? from_run->time : 0.0, -1e300, 1e300);
+  if (s.time.steps > std::numeric_limits<long>::max() / 2)
+    R.fail(ti.get("steps"), "[time] steps", "at most " + std::to_string(std::numeric_limits<long>::max() / 2));
   s.time.integrator = R.string(ti, "time", "integrator", s.time.integrator);  // checked by model resolution
   s.time.rkf_tolerance = R.number(ti, "time", "rkf_tolerance", 1e-6, 1e-14, 1.0);
 
@@ -520,6 +549,8 @@ std::string resolved_toml(const Scene& s) {
   root.insert("brownian", toml::table{{"seed", int64_t(s.seed)}});
   root.insert("time", toml::table{{"dt", s.time.dt},
                                   {"steps", int64_t(s.time.steps)},
+                                  {"start_step", int64_t(s.time.start_step)},
+                                  {"start_time", s.time.start_time},
                                   {"integrator", s.time.integrator},
                                   {"rkf_tolerance", s.time.rkf_tolerance}});
   toml::array record;

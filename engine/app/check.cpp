@@ -302,8 +302,10 @@ int check(Simulation& sim, const CheckOptions& opt, std::FILE* out) {
   else
     std::fprintf(out, "domain: open\n");
   const IntegratorCost* ic = integrator_cost(model.integrator);
-  std::fprintf(out, "time: %lld steps of dt = %.4g, to t = %.4g\n", static_cast<long long>(s.time.steps), s.time.dt,
-               double(s.time.steps) * s.time.dt);
+  std::fprintf(out, "time: %lld steps of dt = %.4g, from step %lld (t = %.4g) to step %lld (t = %.4g)\n",
+               static_cast<long long>(s.time.steps), s.time.dt, static_cast<long long>(s.time.start_step),
+               s.time.start_time, static_cast<long long>(s.time.last_step()),
+               s.time.start_time + double(s.time.steps) * s.time.dt);
   std::fprintf(out, "%s\n", model.describe().c_str());
 
   // Forces.
@@ -351,7 +353,7 @@ int check(Simulation& sim, const CheckOptions& opt, std::FILE* out) {
     std::fprintf(out, "  ambient flow: %s, rate %.4g /time\n", name_of(s.flow.kind), s.flow.rate);
 
   // Outputs.
-  const long long frames = s.time.steps / s.output.every + 1;
+  const long long frames = s.time.steps / s.output.every + 1 + (s.time.steps % s.output.every != 0 ? 1 : 0);
   std::string rec;
   for (const auto& r : s.output.record) rec += (rec.empty() ? "" : ", ") + (r == "all" ? std::string("all the model computes") : r);
   std::fprintf(out, "output:\n  trajectory: %s, a frame every %lld steps (%lld frames); per particle: position, radius%s%s\n",

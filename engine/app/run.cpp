@@ -70,7 +70,7 @@ long run(Simulation& sim, const RunOptions& opt) {
     io::Checkpoint restored;
     out.emplace(io::RunOutput::resume(opt.out, header, restored));
     s = restored.state;
-    control.frame_done = s.step % scene.output.every == 0;
+    control.frame_done = sim.frame_step(s.step);
   } else {
     s = sim.initial_state();
     out.emplace(io::RunOutput::start(opt.out, header));
@@ -81,7 +81,7 @@ long run(Simulation& sim, const RunOptions& opt) {
                 opt.resume ? std::optional<std::int64_t>(s.step) : std::nullopt);
   RunFiles files(std::move(*out), std::move(xyz));
   const long taken = sim.run(s, files, control);
-  if (s.step >= scene.time.steps) files.finish();
+  if (s.step >= scene.time.last_step()) files.finish();
   return taken;
 }
 

@@ -109,7 +109,10 @@ struct HydroParams {
 
 struct TimeParams {
   double dt = 1e-3;      // time step [time unit]
-  std::int64_t steps = 0;
+  std::int64_t steps = 0;       // steps to take from start_step
+  std::int64_t start_step = 0;  // step and time of the initial state (a continued run: the file's last frame)
+  double start_time = 0.0;
+  std::int64_t last_step() const { return start_step + steps; }
   std::string integrator = "euler";  // a registered integrator (engine/methods.cpp)
   double rkf_tolerance = 1e-6;  // local error per step for rkf45 [a]
 };
@@ -118,7 +121,7 @@ struct TimeParams {
 inline const std::vector<std::string> kEveryParticleOutput{"angular_velocity", "force", "stresslet", "torque", "velocity"};
 
 struct OutputParams {
-  std::int64_t every = 1;              // frames every N steps
+  std::int64_t every = 1;              // frames every N steps from the start, and at the last step
   std::int64_t checkpoint_every = 0;   // checkpoint every N steps; 0 = at the end only
   // Optional per-particle outputs (registered in engine/observers.cpp), sorted, no repeats.
   // {"all"} (the default) = every one the resolved model computes; named outputs must be computed
