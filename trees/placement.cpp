@@ -14,11 +14,13 @@ namespace {
 
 // RSA of the growth route runs at this volume fraction (fast: far below the RSA jamming limit).
 constexpr double kRsaStartFraction = 0.25;
+constexpr double kRsaFullSizeBudget = 0.05;
 // Random placement is refused above this: the hard-sphere fluid ends near 0.55 and random close
 // packing of equal spheres is ~0.64.
 constexpr double kRandomMaxVolumeFraction = 0.6;
 constexpr long kRsaAttemptsPerParticle = 2000000;
-constexpr long kMaxGrowthSweeps = 20000;
+constexpr long kMaxGrowthSweeps = 10000;
+constexpr long kStallWindow = 500;
 // Growth pass: a particle's scale grows by at most growth_rate per sweep and by at most this
 // fraction of the room its neighbours leave (larger fractions jam the fluid near phi ~ 0.5).
 constexpr double growth_rate = 0.01;
@@ -240,11 +242,22 @@ void check_fits(const Region& reg, const std::vector<double>& a, double gap) {
 // Random sequential addition with radii s0 * a_i, largest first.
 void rsa(HardSpheres& hs, double s0, std::uint64_t seed, double phi_target) {
   const std::size_t n = hs.a.size();
+  double volume_sum_a3 = 0.0;
+  for (double a : hs.a) volume_sum_a3 += a * a * a;
   std::vector<std::size_t> order(n);
   std::iota(order.begin(), order.end(), std::size_t(0));
   std::stable_sort(order.begin(), order.end(), [&](std::size_t i, std::size_t j) { return hs.a[i] > hs.a[j]; });
   RandomStream rs = RandomStream::for_purpose(seed, Purpose::placement, 1);
+  // The largest particles start at full size while the RSA volume fraction stays below
+  // kRsaStartFraction + kRsaFullSizeBudget (large particles are the slowest to grow).
   std::fill(hs.s.begin(), hs.s.end(), s0);
+  double extra = 0.0;
+  for (std::size_t k = 0; k < n && s0 < 1.0; ++k) {
+    const std::size_t i = order[k];
+    extra += phi_target * (1.0 - s0 * s0 * s0) * std::pow(hs.a[i], 3) / volume_sum_a3;
+    if (extra > kRsaFullSizeBudget) break;
+    hs.s[i] = 1.0;
+  }
   for (std::size_t k = 0; k < n; ++k) {
     const std::size_t i = order[k];
     const double ri = hs.r(i);
@@ -254,7 +267,7 @@ void rsa(HardSpheres& hs, double s0, std::uint64_t seed, double phi_target) {
       if (++attempt > kRsaAttemptsPerParticle) {
         std::ostringstream o;
         o << "random sequential addition found no room for particle " << k + 1 << " of " << n << " after "
-          << kRsaAttemptsPerParticle << " attempts (volume fraction " << phi_target * s0 * s0 * s0
+          << kRsaAttemptsPerParticle << " attempts (volume fraction " << phi_target
           << "); use equilibration_sweeps > 0 or a lower volume fraction";
         fail(o.str());
       }
@@ -366,7 +379,6 @@ Placement place_particles(const PlacementParams& p, const Vec3& box_in) {
   check_fits(reg, out.radius, p.min_gap);
   const double a_median = median(out.radius);
   const double h = 2.0 * a_median + p.min_gap;
-  HardSpheres hs(reg, p.min_gap, out.radius, h);
 
   if (p.pattern == PlacementParams::Pattern::lattice) {
     const double spacing = reg.periodic ? 0.0 : std::cbrt(vol / phi / double(n));
@@ -397,8 +409,7 @@ Placement place_particles(const PlacementParams& p, const Vec3& box_in) {
       for (auto& y : sites) y *= spacing;
     }
     // Lattice clusters in an open domain are not confined by walls; only the pairs are checked.
-    Region loose = reg;
-    Grid lattice_grid(loose, h, n);
+    Grid lattice_grid(reg, h, n);
     for (std::size_t i = 0; i < n; ++i) {
       const double ai = out.radius[i];
       bool hit = false;
@@ -418,14 +429,15 @@ Placement place_particles(const PlacementParams& p, const Vec3& box_in) {
     return out;
   }
 
-  if (phi > kRandomMaxVolumeFraction) {
+  if (phi > kRandomMaxVolumeFraction * (1 + 1e-9)) {
     std::ostringstream o;
     o << "random placement supports volume fractions up to " << kRandomMaxVolumeFraction << " (requested " << phi
       << "; the hard-sphere fluid ends near 0.55, random close packing is ~0.64); use generate = \"lattice\"";
     fail(o.str());
   }
+  HardSpheres hs(reg, p.min_gap, out.radius, h);
   if (p.equilibration_sweeps == 0) {
-    if (phi > kRsaMaxVolumeFraction) {
+    if (phi > kRsaMaxVolumeFraction * (1 + 1e-9)) {
       std::ostringstream o;
       o << "plain random sequential addition (equilibration_sweeps = 0) is limited to volume fraction "
         << kRsaMaxVolumeFraction << " (requested " << phi
@@ -450,19 +462,28 @@ Placement place_particles(const PlacementParams& p, const Vec3& box_in) {
     // Step adapted towards acceptance ~0.4 (only during growth and the first half of equilibration).
     if (adapt) delta = std::min(delta_max, delta * (acc > 0.4 ? 1.1 : 0.9));
   };
+  auto reached = [&] {
+    double v = 0;
+    for (std::size_t i = 0; i < n; ++i) v += 4.0 / 3.0 * kPi * std::pow(hs.r(i), 3);
+    return v / (reg.periodic ? reg.box.prod() : vol / phi);
+  };
   long below = grow(hs, growth_rate, room_fraction, a_median);
-  for (long g = 0; below > 0; ++g) {
-    if (g == kMaxGrowthSweeps) {
-      double reached = 0;
-      for (std::size_t i = 0; i < n; ++i) reached += 4.0 / 3.0 * kPi * std::pow(hs.r(i), 3);
-      std::ostringstream o;
-      o << "random placement: compression to volume fraction " << phi << " stalled at "
-        << reached / (vol / phi) << " after " << kMaxGrowthSweeps << " Monte Carlo sweeps (" << below
-        << " particles below full size); lower volume_fraction or min_gap";
-      fail(o.str());
-    }
+  double last = reached();
+  for (long g = 1; below > 0; ++g) {
     run_sweep(true);
     below = grow(hs, growth_rate, room_fraction, a_median);
+    // Stalled: less than 1% of the remaining deficit gained in the last kStallWindow sweeps.
+    if (below > 0 && (g % kStallWindow == 0 || g == kMaxGrowthSweeps)) {
+      const double now = reached();
+      if (phi - now > 0.99 * (phi - last) || g == kMaxGrowthSweeps) {
+        std::ostringstream o;
+        o << "random placement: compression to volume fraction " << phi << " reached only " << now << " after " << g
+          << " Monte Carlo sweeps (" << below << " particles below full size; the hard-sphere fluid ends near "
+          << "0.55, less in small open regions, whose walls pack less densely); lower volume_fraction or min_gap";
+        fail(o.str());
+      }
+      last = now;
+    }
   }
   out.growth_sweeps = long(sweep);
   for (long k = 0; k < p.equilibration_sweeps; ++k) run_sweep(k < p.equilibration_sweeps / 2);

@@ -11,24 +11,29 @@
 // in an open domain a particle stays inside the region (|x_i| <= R - a_i for the sphere of radius
 // R, x_i within a_i of no face for the cube). The region's volume is sum (4/3) pi a_i^3 / phi.
 //
-// random:  (1) random sequential addition (RSA [F80]): particles in decreasing size, each at
-//              uniform random trial positions until it overlaps nobody. With equilibration_sweeps
-//              = 0 this is the result (RSA jams at phi ~ 0.38 [F80]; refused above 0.35).
-//          (2) otherwise RSA is run with all radii scaled by lambda0 = min(1, (0.25/phi)^(1/3)),
-//              then hard-sphere Metropolis Monte Carlo [M53] sweeps (N single-particle trial
-//              displacements, uniform in a cube, rejected on overlap) alternate with growth
-//              passes in which each particle grows its own scale s_i towards 1 by half of the room
-//              its neighbours leave (to 1 at once when there is room), a Monte Carlo version of
-//              the Lubachevsky–Stillinger compression [LS90]; once every s_i = 1, equilibration_
-//              sweeps further sweeps at the target size equilibrate the hard-sphere fluid.
-//              Sweep k uses the counter-based stream (equilibration, k).
-// lattice: simple cubic lattice of spacing (V_region / count)^(1/3) (open sphere: the count
-//          sites nearest the centre); a site whose particle would overlap is an error.
+// random:  (1) random sequential addition (RSA): particles in decreasing size, each at uniform
+//              random trial positions until it overlaps nobody. With equilibration_sweeps = 0 this
+//              is the result (RSA of spheres jams at phi = 0.384 [C88]; refused above 0.35, where
+//              the last particles already need millions of attempts each).
+//          (2) otherwise RSA is run at reduced size: s_i = lambda0 = (0.25/phi)^(1/3) (if < 1),
+//              except the largest particles, which start at full size while the RSA volume
+//              fraction stays <= 0.30. Then hard-sphere Metropolis Monte Carlo [M53] sweeps
+//              (each particle in turn tries a displacement uniform in a cube, rejected on overlap;
+//              the cube's edge adapts towards acceptance 0.4) alternate with growth passes in
+//              which each particle grows its scale s_i towards 1 by at most 0.01 and by at most
+//              2% x max(1, a_i / median a) (at most 10%) of the room its neighbours and the
+//              walls leave: a Monte Carlo form of Lubachevsky–Stillinger compression [LS90],
+//              slow enough that the fluid stays near equilibrium. Once every s_i = 1,
+//              equilibration_sweeps sweeps at full size equilibrate the hard-sphere fluid.
+//              Sweep k uses the counter-based stream (equilibration, k); RSA uses (placement, 1).
+// lattice: simple cubic lattice (periodic box or open cube: ceil(count^(1/3)) sites per edge;
+//          open sphere: the count sites of spacing (V_region / count)^(1/3) nearest the centre);
+//          a site whose particle would overlap is an error.
 //
 // Every step is O(N) per sweep: a uniform cell grid in which each particle is registered in every
 // cell its bounding cube touches (exact for any size ratio; work ~ N + V / h^3).
 //
-// [F80] Feder, J. Theor. Biol. 87, 237 (1980) — RSA jamming coverage.
+// [C88] Cooper, Phys. Rev. A 38, 522 (1988) — RSA of spheres, jamming at phi = 0.384.
 // [M53] Metropolis, Rosenbluth, Rosenbluth, Teller & Teller, J. Chem. Phys. 21, 1087 (1953).
 // [LS90] Lubachevsky & Stillinger, J. Stat. Phys. 60, 561 (1990).
 #include "engine/core/types.hpp"
@@ -54,7 +59,7 @@ struct PlacementParams {
   std::uint64_t seed = 1;
 };
 
-// Plain RSA is refused above this volume fraction: it jams at ~0.38 [F80], and beyond ~0.35 the
+// Plain RSA is refused above this volume fraction: it jams at ~0.38 [C88], and beyond ~0.35 the
 // last particles need millions of attempts each.
 inline constexpr double kRsaMaxVolumeFraction = 0.35;
 
