@@ -3,6 +3,7 @@
 #include "engine/core/errors.hpp"
 #include "io/h5md.hpp"
 #include "io/xyz.hpp"
+#include "trees/neighbor_list.hpp"
 #include "trees/placement.hpp"
 
 #include <toml++/toml.h>
@@ -138,6 +139,11 @@ class Reader {
   }
 
   static std::string where(const std::string& table, const std::string& key) { return "[" + table + "] " + key; }
+  static std::string brief(double v) {
+    std::ostringstream o;
+    o << v;
+    return o.str();
+  }
   static std::string type_name(const toml::node& n) {
     switch (n.type()) {
       case toml::node_type::string: return "a string";
@@ -156,6 +162,13 @@ class Reader {
   std::map<std::string, int>* lines_;
 };
 
+// Particle sizes: every radius finite in [kMinRadius, kMaxRadius] a and max/min <= kMaxRadiusRatio,
+// the size ratio range over which the lubrication resistance functions are validated
+// (docs/lubrication.md: lambda in [0.01, 100]). Periodic box edges up to kMaxBoxEdge a; at most
+// kMaxCount generated particles.
+constexpr double kMinRadius = 1e-3, kMaxRadius = 1e3, kMaxRadiusRatio = 100.0, kMaxBoxEdge = 1e6;
+constexpr long kMaxCount = 10000000;
+
 const toml::table& sub(const Reader& r, const toml::table& root, const std::string& name) {
   static const toml::table empty;
   const toml::node* n = root.get(name);
@@ -173,9 +186,13 @@ void read_particles(const Reader& R, const toml::table& t, Scene& s, const std::
   const bool has_pos = t.contains("positions"), has_file = t.contains("file"), has_gen = t.contains("generate");
   if (int(has_pos) + int(has_file) + int(has_gen) != 1)
     R.fail(&t, "[particles]", "give exactly one of positions, file, generate");
-  for (const char* key : {"region", "equilibration_sweeps", "min_gap"})
+  // Keys of the generator (`radius` also sizes positions and radius-less XYZ files).
+  for (const char* key : {"count", "volume_fraction", "size_distribution", "radius_ratio", "large_fraction", "sigma",
+                          "seed", "region", "equilibration_sweeps", "min_gap"})
     if (!has_gen && t.contains(key))
-      R.fail(t.get(key), std::string("[particles] ") + key, "only meaningful with generate");
+      R.fail(t.get(key), std::string("[particles] ") + key,
+             std::string("only meaningful with generate (it applies only to generated particles, not to ") +
+                 (has_pos ? "positions" : "file") + ")");
   if (has_pos) {
     const toml::array* a = t.get("positions")->as_array();
     if (!a || a->empty()) R.fail(t.get("positions"), "[particles] positions", "expected a non-empty list of [x, y, z]");
@@ -190,12 +207,17 @@ void read_particles(const Reader& R, const toml::table& t, Scene& s, const std::
       }
       for (const auto& e : *r) {
         auto v = e.value<double>();
-        if (!v || !(*v > 0)) R.fail(&e, "[particles] radii", "every radius must be a number > 0");
+        if (!v || !std::isfinite(*v) || *v < kMinRadius || *v > kMaxRadius) {
+          std::ostringstream o;
+          o << "radius " << s.radii.size() << " is " << (v ? Reader::brief(*v) : Reader::type_name(e))
+            << " (allowed [" << kMinRadius << ", " << kMaxRadius << "] a)";
+          R.fail(&e, "[particles] radii", o.str());
+        }
         s.radii.push_back(*v);
       }
       if (t.contains("radius")) R.fail(t.get("radius"), "[particles] radius", "give radius or radii, not both");
     } else {
-      s.radii.assign(s.positions.size(), R.number(t, T, "radius", 1.0, 0.0, 1e6, true));
+      s.radii.assign(s.positions.size(), R.number(t, T, "radius", 1.0, kMinRadius, kMaxRadius));
     }
   } else if (has_file) {
     std::string path = R.string(t, T, "file", "");
@@ -211,7 +233,7 @@ void read_particles(const Reader& R, const toml::table& t, Scene& s, const std::
         if (frames.empty()) throw std::runtime_error(path + ": no frames");
         s.positions = frames.back().position;
         s.radii = frames.back().radius;
-        if (s.radii.empty()) s.radii.assign(s.positions.size(), R.number(t, T, "radius", 1.0, 0.0, 1e6, true));
+        if (s.radii.empty()) s.radii.assign(s.positions.size(), R.number(t, T, "radius", 1.0, kMinRadius, kMaxRadius));
       }
     } catch (const std::exception& e) {
       R.fail(t.get("file"), "[particles] file", e.what());
@@ -221,11 +243,11 @@ void read_particles(const Reader& R, const toml::table& t, Scene& s, const std::
     p.pattern = R.choice(t, T, "generate", "random", {"random", "lattice"}) == "lattice"
                     ? PlacementParams::Pattern::lattice : PlacementParams::Pattern::random;
     p.volume_fraction = R.number(t, T, "volume_fraction", 0.1, 0.0, 0.74, true);
-    p.radius = R.number(t, T, "radius", 1.0, 0.0, 1e6, true);
+    p.radius = R.number(t, T, "radius", 1.0, kMinRadius, kMaxRadius);
     const std::string sd = R.choice(t, T, "size_distribution", "monodisperse", {"monodisperse", "bidisperse", "lognormal"});
     p.sizes = sd == "bidisperse" ? PlacementParams::Sizes::bidisperse
             : sd == "lognormal" ? PlacementParams::Sizes::lognormal : PlacementParams::Sizes::monodisperse;
-    p.radius_ratio = R.number(t, T, "radius_ratio", 2.0, 0.0, 1e3, true);
+    p.radius_ratio = R.number(t, T, "radius_ratio", 2.0, 1.0 / kMaxRadiusRatio, kMaxRadiusRatio);
     p.large_fraction = R.number(t, T, "large_fraction", 0.5, 0.0, 1.0);
     p.sigma = R.number(t, T, "sigma", 0.2, 0.0, 2.0);
     p.seed = std::uint64_t(R.integer(t, T, "seed", 1, 0, std::numeric_limits<long>::max()));
@@ -243,7 +265,7 @@ void read_particles(const Reader& R, const toml::table& t, Scene& s, const std::
       if (t.contains("count") == t.contains("volume_fraction"))
         R.fail(&t, "[particles] count/volume_fraction", "in a periodic box give exactly one of count and volume_fraction");
       if (t.contains("count")) {
-        p.count = R.integer(t, T, "count", 0, 1, 10000000);
+        p.count = R.integer(t, T, "count", 0, 1, kMaxCount);
         p.volume_fraction = 0.0;
       } else {
         const double a3 = p.radius * p.radius * p.radius;
@@ -252,11 +274,19 @@ void read_particles(const Reader& R, const toml::table& t, Scene& s, const std::
           mean_a3 = a3 * (1.0 - p.large_fraction + p.large_fraction * std::pow(p.radius_ratio, 3));
         else if (p.sizes == PlacementParams::Sizes::lognormal)
           mean_a3 = a3 * std::exp(4.5 * p.sigma * p.sigma);
-        p.count = std::max(1L, std::lround(p.volume_fraction * s.domain.box.prod() / (4.0 / 3.0 * kPi * mean_a3)));
+        // Checked as a number before anything is allocated for it.
+        const double count = std::round(p.volume_fraction * s.domain.box.prod() / (4.0 / 3.0 * kPi * mean_a3));
+        if (!(count >= 1 && count <= double(kMaxCount))) {
+          std::ostringstream o;
+          o << "value " << p.volume_fraction << " gives count = round(phi V / mean sphere volume) = " << count
+            << " in this box (allowed count 1 to " << kMaxCount << ")";
+          R.fail(t.get("volume_fraction"), "[particles] volume_fraction", o.str());
+        }
+        p.count = long(count);
       }
     } else {
       if (!t.contains("count")) R.fail(&t, "[particles] count", "required with generate in an open domain");
-      p.count = R.integer(t, T, "count", 0, 1, 10000000);
+      p.count = R.integer(t, T, "count", 0, 1, kMaxCount);
     }
     try {
       const Placement pl = place_particles(p, s.domain.periodic() ? s.domain.box : Vec3::Zero());
@@ -279,9 +309,76 @@ void read_particles(const Reader& R, const toml::table& t, Scene& s, const std::
   }
 }
 
+// Every particle source: finite positions, radii in range, and (for given positions or a file)
+// no two particles overlapping by more than half the smaller radius (a coincident or nearly
+// coincident pair is an input mistake; the lubrication regularisation covers small overlaps only).
+void check_particles(const Reader& R, const toml::table& t, const Scene& s, const std::string& base_dir) {
+  const char* key = t.contains("positions") ? "positions" : t.contains("file") ? "file" : "generate";
+  std::string origin = "";
+  if (std::string(key) == "file") {
+    std::string path = t.get("file")->value_or(std::string());
+    if (!path.empty() && path[0] != '/') path = base_dir + "/" + path;
+    origin = " of " + path;
+  }
+  const toml::node* node = t.get(key);
+  const std::string w = std::string("[particles] ") + key;
+  const std::size_t n = s.positions.size();
+  if (s.radii.size() != n) R.fail(node, w, "has " + std::to_string(s.radii.size()) + " radii for " + std::to_string(n) + " positions");
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3& x = s.positions[i];
+    if (!x.allFinite()) {
+      std::ostringstream o;
+      o << "particle " << i << origin << " has the non-finite position [" << x.x() << ", " << x.y() << ", " << x.z()
+        << "] (allowed: finite numbers)";
+      R.fail(node, w, o.str());
+    }
+    if (!(s.radii[i] >= kMinRadius && s.radii[i] <= kMaxRadius)) {
+      std::ostringstream o;
+      o << "particle " << i << origin << " has radius " << s.radii[i] << " (allowed [" << kMinRadius << ", "
+        << kMaxRadius << "] a)";
+      R.fail(node, w, o.str());
+    }
+  }
+  if (n == 0) return;
+  const auto [lo, hi] = std::minmax_element(s.radii.begin(), s.radii.end());
+  if (*hi / *lo > kMaxRadiusRatio) {
+    std::ostringstream o;
+    o << "radius ratio max/min = " << *hi << "/" << *lo << " = " << *hi / *lo << " (particles "
+      << hi - s.radii.begin() << " and " << lo - s.radii.begin() << "; allowed at most " << kMaxRadiusRatio
+      << ", the validated size-ratio range of the lubrication functions)";
+    R.fail(node, w, o.str());
+  }
+  if (std::string(key) == "generate") return;  // generated particles keep a gap by construction
+  std::vector<trees::NeighborPair> pairs;
+  try {
+    pairs = trees::neighbor_pairs(s.positions, s.radii, s.domain, 0.0);
+  } catch (const std::invalid_argument&) {  // a box too small for the cell list: few particles, plain loop
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::size_t j = i + 1; j < n; ++j) {
+        const Vec3 r = s.domain.periodic() ? s.domain.minimum_image(s.positions[i] - s.positions[j])
+                                           : Vec3(s.positions[i] - s.positions[j]);
+        pairs.push_back({int(i), int(j), r, r.norm()});
+      }
+  }
+  for (const auto& p : pairs) {
+    const double ai = s.radii[std::size_t(p.i)], aj = s.radii[std::size_t(p.j)];
+    const double overlap = ai + aj - p.dist;
+    if (overlap > 0.5 * std::min(ai, aj)) {
+      std::ostringstream o;
+      o << "particles " << p.i << " and " << p.j << origin << " overlap by " << overlap << " a (centres " << p.dist
+        << " a apart, radii " << ai << " and " << aj << "; allowed overlap at most half the smaller radius)";
+      R.fail(node, w, o.str());
+    }
+  }
+}
+
 PairForceParams read_pair(const Reader& R, const toml::table& t, std::size_t index) {
   const std::string T = "forces.pair." + std::to_string(index);
   PairForceParams p;
+  // Unknown keys first (a misspelt `kind` is reported as itself, not as a missing `kind`); keys of
+  // another kind are refused below, once the kind is known.
+  R.only(t, T, {"kind", "cutoff", "depth", "kappa", "hamaker", "debye_kappa", "surface_potential",
+                "surface_potential_reduced", "born_sigma", "min_gap", "double_layer", "stiffness"});
   const std::string kind = R.choice(t, T, "kind", "", name_list<PairForceParams::Kind>());
   if (kind.empty())
     R.fail(&t, "[[forces.pair]] kind", "required (" + quoted_list(name_list<PairForceParams::Kind>()) + ")");
@@ -315,9 +412,89 @@ std::string dir_of(const std::string& path) {
   return p.empty() ? "." : p.string();
 }
 
+// Limits checked on the raw text before toml++ parses it: its parser recurses once per nesting
+// level and per dotted-key part, so an unbounded text could exhaust the stack (a crash instead of
+// an error). The scan follows TOML's lexical structure just far enough (strings, comments,
+// brackets, keys) to count both; everything else is left to the parser.
+constexpr std::size_t kMaxSceneBytes = std::size_t(16) << 20;  // 16 MiB
+constexpr std::size_t kMaxNesting = 64;   // open [ and { at once (arrays, inline tables, headers)
+constexpr int kMaxKeyParts = 64;          // dotted parts of one key or table header
+
+void check_text_shape(const std::string& text, const std::string& source) {
+  if (text.size() > kMaxSceneBytes)
+    throw ConfigError(source + ": scene text has " + std::to_string(text.size()) + " bytes (allowed at most " +
+                      std::to_string(kMaxSceneBytes) + " bytes = 16 MiB)");
+  long line = 1;
+  auto fail = [&](const std::string& msg) { throw ConfigError(source + ":" + std::to_string(line) + ": " + msg); };
+  std::vector<char> stack;  // 'H' table header, '[' array, '{' inline table
+  bool key = true;          // reading a key: line start at top level, in a header, after '{' or ',' of an inline table
+  int parts = 1;
+  const std::size_t n = text.size();
+  auto open = [&](char c) {
+    stack.push_back(c);
+    if (stack.size() > kMaxNesting)
+      fail("arrays, inline tables and headers nested " + std::to_string(stack.size()) + " deep (allowed at most " +
+           std::to_string(kMaxNesting) + " levels)");
+  };
+  for (std::size_t i = 0; i < n; ++i) {
+    const char c = text[i];
+    if (c == '\n') {
+      ++line;
+      if (stack.empty()) key = true, parts = 1;
+      continue;
+    }
+    if (c == '#') {
+      while (i + 1 < n && text[i + 1] != '\n') ++i;
+      continue;
+    }
+    if (c == '"' || c == '\'') {  // skip a string (escapes only in basic strings)
+      const bool multi = text.compare(i, 3, std::string(3, c)) == 0;
+      std::size_t j = i + (multi ? 3 : 1);
+      for (; j < n; ++j) {
+        if (c == '"' && text[j] == '\\') { if (j + 1 < n && text[j + 1] == '\n') ++line; ++j; continue; }
+        if (text[j] == '\n') { if (!multi) break; ++line; continue; }
+        if (text[j] == c && (!multi || text.compare(j, 3, std::string(3, c)) == 0)) break;
+      }
+      if (multi) while (j + 3 < n && text[j + 3] == c) ++j;  // up to two quotes may end the content
+      i = multi ? std::min(n, j + 3) - 1 : (j < n && text[j] == '\n' ? j - 1 : j);
+      continue;
+    }
+    if (key) {
+      if (c == '.') {
+        if (++parts > kMaxKeyParts)
+          fail("a key or table header with more than " + std::to_string(kMaxKeyParts) +
+               " dotted parts (allowed 1 to " + std::to_string(kMaxKeyParts) + " parts)");
+      } else if (c == '=') {
+        key = false, parts = 1;
+      } else if (c == '[' && stack.empty()) {
+        open('H');
+        if (i + 1 < n && text[i + 1] == '[') ++i;
+        parts = 1;
+      } else if (c == ']' && !stack.empty() && stack.back() == 'H') {
+        stack.pop_back();
+        if (i + 1 < n && text[i + 1] == ']') ++i;
+        key = false;
+      } else if (c == '}' && !stack.empty() && stack.back() == '{') {
+        stack.pop_back();
+        key = false;
+      }
+      continue;
+    }
+    if (c == '[' || c == '{') {
+      open(c);
+      key = c == '{', parts = 1;
+    } else if (c == ']' || c == '}') {
+      if (!stack.empty()) stack.pop_back();
+    } else if (c == ',' && !stack.empty() && stack.back() == '{') {
+      key = true, parts = 1;
+    }
+  }
+}
+
 }  // namespace
 
 Scene parse_scene(const std::string& text, const std::string& source) {
+  check_text_shape(text, source);
   toml::table root;
   try {
     root = toml::parse(text, source);
@@ -340,7 +517,12 @@ Scene parse_scene(const toml::table& root, const std::string& source) {
   s.domain.kind = R.name(dom, "domain", "kind", Domain::Kind::open);
   if (const toml::node* b = dom.get("box")) {
     s.domain.box = R.vec3(*b, "[domain] box");
-    if (s.domain.box.minCoeff() <= 0) R.fail(b, "[domain] box", "every edge must be > 0");
+    if (s.domain.box.minCoeff() <= 0 || s.domain.box.maxCoeff() > kMaxBoxEdge) {
+      std::ostringstream o;
+      o << "edges [" << s.domain.box.x() << ", " << s.domain.box.y() << ", " << s.domain.box.z()
+        << "] out of range (allowed every edge in (0, " << kMaxBoxEdge << "] a)";
+      R.fail(b, "[domain] box", o.str());
+    }
     if (!s.domain.periodic()) R.fail(b, "[domain] box", "only meaningful with kind = \"periodic\"");
   } else if (s.domain.periodic()) {
     R.fail(&dom, "[domain] box", "required with kind = \"periodic\"");
@@ -374,6 +556,8 @@ Scene parse_scene(const toml::table& root, const std::string& source) {
     }
     if (from_run->periodic && !dom.contains("shear_strain")) s.domain.shear_strain = from_run->shear_strain;
   }
+
+  check_particles(R, sub(R, root, "particles"), s, dir_of(source));
 
   const toml::table& fo = sub(R, root, "forces");
   R.only(fo, "forces", {"external_force", "external_torque", "pair", "gravity"});

@@ -220,3 +220,114 @@ TEST_CASE("Brownian motion with fixed particles is refused with what works inste
   CHECK(error_of(fixed + "[fluid]\nkT = 1.0\n[hydrodynamics]\nmodel = \"free_draining\"\n").empty());
   CHECK(error_of("[particles]\npositions = [[0,0,0],[3,0,0],[6,0,0]]\n[fluid]\nkT = 1.0\n").empty());
 }
+
+TEST_CASE("pathological TOML texts are refused before parsing, naming the line and the limit") {
+  // 200 000 dotted parts in a header or a key, or deep nesting, used to overflow the stack of the
+  // TOML parser (SIGSEGV); the scan before parsing refuses them with a ConfigError.
+  std::string parts;
+  for (int i = 0; i < 200000; ++i) parts += "a.";
+  std::string e = error_of(kTwo + "[" + parts + "a]\n");
+  CHECK(contains(e, "bad.toml:3"));
+  CHECK(contains(e, "dotted parts"));
+  CHECK(contains(e, "allowed 1 to 64"));
+  e = error_of(kTwo + "[output]\n" + parts + "a = 1\n");
+  CHECK(contains(e, "bad.toml:4"));
+  CHECK(contains(e, "allowed 1 to 64"));
+  e = error_of(kTwo + "[output]\nx = {" + parts + "a = 1}\n");
+  CHECK(contains(e, "allowed 1 to 64"));
+  e = error_of(kTwo + "[output]\nx = " + std::string(100000, '[') + std::string(100000, ']') + "\n");
+  CHECK(contains(e, "bad.toml:4"));
+  CHECK(contains(e, "allowed at most 64 levels"));
+  std::string inl;
+  for (int i = 0; i < 100000; ++i) inl += "{a=";
+  e = error_of(kTwo + "[output]\nx = " + inl + "1" + std::string(100000, '}') + "\n");
+  CHECK(contains(e, "allowed at most 64 levels"));
+  e = error_of(kTwo + "# " + std::string(17u << 20, 'x') + "\n");
+  CHECK(contains(e, "allowed at most 16777216 bytes"));
+  // Dots and brackets inside strings, comments and numbers are not structure.
+  const std::string ok = kTwo + "[output]\n# a.b.c [[[[ {{{\nauthor = \"" + parts + "[[[{{{\"\n";
+  CHECK(error_of(ok) == "");
+  CHECK(error_of(kTwo + "[forces]\nexternal_force = [[0.5, 0.25, 1.5], [0.5, 0.25, 1.5]]\n"
+                        "[[forces.pair]]\nkind = 'hertz'\n[output]\nauthor = '''x.y\n\"z]'''\n") == "");
+}
+
+TEST_CASE("a misspelt key is reported as unknown before a required key is reported missing") {
+  const std::string e = error_of(kTwo + "[[forces.pair]]\nkinds = \"hertz\"\n");
+  CHECK(contains(e, "kinds"));
+  CHECK(contains(e, "unknown key"));
+  CHECK(contains(e, "allowed: "));
+  CHECK(contains(e, "kind,"));
+  CHECK(!contains(e, "required"));
+}
+
+TEST_CASE("generator keys with positions or file are refused, naming the key") {
+  for (const std::string kv : {"count = \"x\"", "volume_fraction = nan", "size_distribution = \"bogus\"", "seed = -3",
+                               "radius_ratio = 2", "large_fraction = 0.5", "sigma = 0.1"}) {
+    const std::string key = kv.substr(0, kv.find(' '));
+    const std::string e = error_of(kTwo + kv + "\n");
+    CHECK_MESSAGE(contains(e, "[particles] " + key), kv);
+    CHECK_MESSAGE(contains(e, "only meaningful with generate"), kv);
+  }
+  CHECK(error_of(kTwo + "radius = 0.5\n") == "");  // radius sizes given positions
+}
+
+TEST_CASE("radii, positions and overlaps are checked against documented ranges") {
+  std::string e = error_of("[particles]\npositions = [[0,0,0],[3,0,0]]\nradii = [1.0, 1e-130]\n");
+  CHECK(contains(e, "[particles] radii"));
+  CHECK(contains(e, "allowed [0.001, 1000] a"));
+  e = error_of("[particles]\npositions = [[0,0,0],[3,0,0]]\nradii = [1.0, inf]\n");
+  CHECK(contains(e, "allowed [0.001, 1000] a"));
+  e = error_of("[particles]\npositions = [[0,0,0]]\nradius = 1e-130\n");
+  CHECK(contains(e, "[particles] radius"));
+  CHECK(contains(e, "allowed [0.001, 1000]"));
+  e = error_of("[particles]\npositions = [[0,0,0],[300,0,0]]\nradii = [0.5, 60.0]\n");
+  CHECK(contains(e, "[particles] positions"));
+  CHECK(contains(e, "allowed at most 100"));
+  e = error_of("[particles]\ngenerate = \"random\"\ncount = 3\nradius_ratio = 500\nsize_distribution = \"bidisperse\"\n");
+  CHECK(contains(e, "[particles] radius_ratio"));
+  CHECK(contains(e, "allowed [0.01, 100]"));
+  // Coincident or deeply overlapping centres: both indices named (also across a periodic boundary).
+  e = error_of("[particles]\npositions = [[0,0,0],[5,0,0],[5,0,0]]\n");
+  CHECK(contains(e, "[particles] positions"));
+  CHECK(contains(e, "particles 1 and 2"));
+  CHECK(contains(e, "half the smaller radius"));
+  e = error_of("[domain]\nkind = \"periodic\"\nbox = [10, 10, 10]\n[particles]\npositions = [[0.2,0,0],[9.5,0,0]]\n");
+  CHECK(contains(e, "particles 0 and 1"));
+  CHECK(error_of("[particles]\npositions = [[0,0,0],[1.6,0,0]]\n") == "");  // overlap 0.4 a: allowed
+  // Non-finite coordinates in an XYZ file: the particle index and the file are named.
+  const auto dir = std::filesystem::temp_directory_path() / "stokesian_test_scene_nan";
+  std::filesystem::create_directories(dir);
+  {
+    std::ofstream f(dir / "nan.xyz");
+    f << "2\nProperties=species:S:1:pos:R:3:radius:R:1\nA 0 0 0 1.0\nA nan 4 0 1.0\n";
+  }
+  {
+    std::ofstream f(dir / "s.toml");
+    f << "[particles]\nfile = \"nan.xyz\"\n";
+  }
+  try {
+    io::load_scene((dir / "s.toml").string());
+    FAIL("no error");
+  } catch (const ConfigError& err) {
+    e = err.what();
+  }
+  CHECK(contains(e, "[particles] file"));
+  CHECK(contains(e, "particle 1"));
+  CHECK(contains(e, "nan.xyz"));
+  CHECK(contains(e, "finite"));
+  std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("periodic box edges and the count implied by volume_fraction are bounded") {
+  std::string e = error_of("[domain]\nkind = \"periodic\"\nbox = [1e7, 10, 10]\n" + kTwo);
+  CHECK(contains(e, "[domain] box"));
+  CHECK(contains(e, "(0, 1e+06] a"));
+  e = error_of("[domain]\nkind = \"periodic\"\nbox = [1e5, 1e5, 1e5]\n[particles]\ngenerate = \"lattice\"\n"
+               "volume_fraction = 0.5\n");
+  CHECK(contains(e, "[particles] volume_fraction"));
+  CHECK(contains(e, "allowed count 1 to 10000000"));
+  CHECK(contains(e, "1.19"));  // round(0.5e15 / (4 pi / 3)) = 1.19e14 particles
+  e = error_of("[domain]\nkind = \"periodic\"\nbox = [3, 3, 3]\n[particles]\ngenerate = \"lattice\"\n"
+               "volume_fraction = 0.001\n");
+  CHECK(contains(e, "= 0 in this box"));
+}
