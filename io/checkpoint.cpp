@@ -201,11 +201,50 @@ std::string join_differences(const std::vector<std::string>& diff) {
 }
 
 RunOutput RunOutput::start(const std::string& path, const RunHeader& header) {
-  // Remove the old checkpoint first: a kill between the two steps leaves no checkpoint, never
-  // a checkpoint that points into the new trajectory.
+  // 1. The start marker, durably: from here on a missing checkpoint means "this start was
+  //    interrupted", so a --resume may replace whatever P holds (the user asked to replace it).
+  const std::string marker = start_marker_path(path);
+  {
+    std::ofstream os(marker, std::ios::trunc);
+    if (!os) throw IoError(marker + ": cannot create the start marker (" + std::strerror(errno) + ")");
+    os << "stokesian: run started, no checkpoint yet; " << path << " may be replaced by --resume\n";
+    os.close();
+    if (!os) throw IoError(marker + ": writing the start marker failed");
+  }
+  detail::fsync_file(marker);
+  detail::fsync_parent_dir(marker);
+  // 2. Remove the old checkpoint before the trajectory is replaced: a kill between the steps
+  //    leaves no checkpoint, never a checkpoint that points into the new trajectory.
   detail::remove_if_exists(checkpoint_path(path));
   detail::remove_if_exists(checkpoint_path(path) + ".tmp");
-  return RunOutput(Trajectory::create(path, header));
+  return RunOutput(Trajectory::create(path, header), true);
+}
+
+std::optional<std::string> RunOutput::nothing_to_resume(const std::string& path) {
+  const std::string cp = checkpoint_path(path), shadow = path + ".shadow";
+  if (detail::exists(cp)) return std::nullopt;
+  const std::string head = "no checkpoint " + cp + ": nothing to resume, starting afresh ";
+  if (detail::exists(start_marker_path(path)))
+    return head + "(the partial " + path + " of an interrupted start is replaced)";
+  if (!detail::exists(path) && !detail::exists(shadow)) return head + "(" + path + " does not exist yet)";
+  // No marker: replace only files that hold no frames at all.
+  for (const std::string& f : {path, shadow}) {
+    if (!detail::exists(f)) continue;
+    std::int64_t frames = -1;
+    std::string problem;
+    try {
+      frames = inspect_trajectory(f).frames;
+    } catch (const IoError& e) {
+      problem = e.what();
+    }
+    if (frames != 0)
+      throw IoError(cp + ": no checkpoint to resume from, and " + f +
+                    (frames > 0 ? " holds " + std::to_string(frames) + " frame(s)" : " is not a readable trajectory (" + problem + ")") +
+                    " that may belong to another run (a finished run whose checkpoint was removed, a `stokesian solve` "
+                    "result, ...); refusing to replace it: run without --resume to start afresh and overwrite it, "
+                    "or move it away");
+  }
+  return head + "(" + path + " holds no frames and is replaced)";
 }
 
 RunOutput RunOutput::resume(const std::string& path, const RunHeader& header, Checkpoint& restored) {
@@ -224,6 +263,9 @@ RunOutput RunOutput::resume(const std::string& path, const RunHeader& header, Ch
     refuse("the model differs (checkpoint: \"" + (stored.empty() ? c.model : stored.text()) + "\", run: \"" +
            (run.empty() ? header.model : run.text()) + "\")");
   RunOutput out(Trajectory::resume(path, header, c.state.step, c.trajectory_frames));
+  // A start marker beside a valid checkpoint is stale (killed between the first checkpoint and
+  // the marker's removal, or before the start removed an older checkpoint): the checkpoint rules.
+  detail::remove_if_exists(start_marker_path(path));
   restored = std::move(c);
   return out;
 }
@@ -245,6 +287,11 @@ void RunOutput::checkpoint(const State& state, const std::map<std::string, doubl
   c.model = traj_.header().model_key.empty() ? traj_.header().model : traj_.header().model_key;
   c.trajectory_frames = traj_.committed_frames();
   write_checkpoint(checkpoint_file(), c);
+  if (marked_) {  // the first checkpoint is durable: P now holds frames a resume must keep
+    detail::remove_if_exists(start_marker_path(traj_.path()));
+    detail::fsync_parent_dir(traj_.path());
+    marked_ = false;
+  }
 }
 
 }  // namespace stokesian::io

@@ -16,6 +16,7 @@
 
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -37,12 +38,25 @@ Checkpoint read_checkpoint(const std::string& path);                  // IoError
 std::string join_differences(const std::vector<std::string>& diff);
 
 inline std::string checkpoint_path(const std::string& trajectory_path) { return trajectory_path + ".ckpt"; }
+// Start marker (P + ".starting"): written by RunOutput::start before anything else, removed once the
+// run's first checkpoint is durable. While it exists, P holds only frames of a run that has no
+// checkpoint yet, so a --resume may replace P (RunOutput::nothing_to_resume).
+inline std::string start_marker_path(const std::string& trajectory_path) { return trajectory_path + ".starting"; }
 
 // The trajectory + checkpoint pair of one run.
 class RunOutput final : public OutputSink {
  public:
-  // Fresh run: removes a stale checkpoint, then creates the trajectory with zero frames.
+  // Fresh run: writes the start marker, removes a stale checkpoint, then creates the trajectory
+  // with zero frames.
   static RunOutput start(const std::string& path, const RunHeader& header);
+  // Before a resume of `path`: std::nullopt when path.ckpt exists (resume from it). Otherwise
+  // there is nothing to resume from, and the result is the one-line notice to print before
+  // starting afresh, allowed only when no committed frame of another run can be lost:
+  //   the start marker exists (P is the leftover of a start that never reached its first
+  //   checkpoint), or P and its shadow are absent, or each of them that exists holds zero frames.
+  // Anything else (P with frames and no checkpoint: a finished run whose checkpoint was
+  // deleted, a `stokesian solve` result, ...) is refused with an IoError saying what to do.
+  static std::optional<std::string> nothing_to_resume(const std::string& path);
   // Continue from path.ckpt: returns the restored checkpoint through `restored`. Refuses
   // (IoError) when checkpoint, trajectory and header disagree (N, scene, model key, frame count).
   static RunOutput resume(const std::string& path, const RunHeader& header, Checkpoint& restored);
@@ -58,8 +72,9 @@ class RunOutput final : public OutputSink {
   std::string checkpoint_file() const { return checkpoint_path(traj_.path()); }
 
  private:
-  explicit RunOutput(Trajectory t) : traj_(std::move(t)) {}
+  explicit RunOutput(Trajectory t, bool marked = false) : traj_(std::move(t)), marked_(marked) {}
   Trajectory traj_;
+  bool marked_ = false;  // the start marker exists: remove it after the first checkpoint
 };
 
 }  // namespace stokesian::io

@@ -4,6 +4,7 @@
 #include "io/h5md.hpp"
 #include "io/xyz.hpp"
 
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <optional>
@@ -66,7 +67,16 @@ long run(Simulation& sim, const RunOptions& opt) {
   control.quiet = opt.quiet;
   control.max_steps = opt.max_steps;
   std::optional<io::RunOutput> out;
-  if (opt.resume) {
+  bool resume = opt.resume;
+  if (resume) {
+    // Nothing to resume from (no checkpoint): start afresh when no other run's frames can be lost
+    // (RunOutput::nothing_to_resume refuses otherwise). Said even with --quiet: files are replaced.
+    if (const auto notice = io::RunOutput::nothing_to_resume(opt.out)) {
+      std::fprintf(stderr, "stokesian: %s\n", notice->c_str());
+      resume = false;
+    }
+  }
+  if (resume) {
     io::Checkpoint restored;
     out.emplace(io::RunOutput::resume(opt.out, header, restored));
     s = restored.state;
@@ -78,7 +88,7 @@ long run(Simulation& sim, const RunOptions& opt) {
   std::optional<io::XyzWriter> xyz;
   if (const std::string path = xyz_path(scene, opt.out); !path.empty())
     xyz.emplace(path, s.domain, io::species_labels(s.radius, s.fixed),
-                opt.resume ? std::optional<std::int64_t>(s.step) : std::nullopt);
+                resume ? std::optional<std::int64_t>(s.step) : std::nullopt);
   RunFiles files(std::move(*out), std::move(xyz));
   const long taken = sim.run(s, files, control);
   if (s.step >= scene.time.last_step()) files.finish();
@@ -88,6 +98,8 @@ long run(Simulation& sim, const RunOptions& opt) {
 void solve(Simulation& sim, const std::string& path) {
   const State s = sim.initial_state();
   const Evaluation ev = sim.evaluate(s, s.position, 0.0, true);
+  // A previous start's marker would let a later --resume replace this result: remove it first.
+  io::detail::remove_if_exists(io::start_marker_path(path));
   io::Trajectory::write_frames(path, run_header(sim), {sim.frame(s, ev)});
   io::detail::remove_if_exists(io::checkpoint_path(path));  // a previous run's, now stale
 }
