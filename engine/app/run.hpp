@@ -1,7 +1,8 @@
 #pragma once
 // The application layer: the only code that joins the engine (simulation) and its writers (io/).
 // A run writes its trajectory (H5MD), its checkpoint and optionally an XYZ export through one
-// OutputSink; --resume continues from the checkpoint. A run that reaches its last step removes
+// OutputSink; --resume continues from the checkpoint, or starts afresh when there is nothing to
+// resume (no checkpoint, and no frames another run could lose). A run that reaches its last step removes
 // the trajectory's working copy (.shadow) and keeps the checkpoint (docs/output.md).
 #include "engine/simulation.hpp"
 
