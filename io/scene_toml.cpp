@@ -349,18 +349,7 @@ void check_particles(const Reader& R, const toml::table& t, const Scene& s, cons
     R.fail(node, w, o.str());
   }
   if (std::string(key) == "generate") return;  // generated particles keep a gap by construction
-  std::vector<trees::NeighborPair> pairs;
-  try {
-    pairs = trees::neighbor_pairs(s.positions, s.radii, s.domain, 0.0);
-  } catch (const std::invalid_argument&) {  // a box too small for the cell list: few particles, plain loop
-    for (std::size_t i = 0; i < n; ++i)
-      for (std::size_t j = i + 1; j < n; ++j) {
-        const Vec3 r = s.domain.periodic() ? s.domain.minimum_image(s.positions[i] - s.positions[j])
-                                           : Vec3(s.positions[i] - s.positions[j]);
-        pairs.push_back({int(i), int(j), r, r.norm()});
-      }
-  }
-  for (const auto& p : pairs) {
+  for (const auto& p : trees::nearest_image_pairs(s.positions, s.radii, s.domain, 0.0)) {
     const double ai = s.radii[std::size_t(p.i)], aj = s.radii[std::size_t(p.j)];
     const double overlap = ai + aj - p.dist;
     if (overlap > 0.5 * std::min(ai, aj)) {

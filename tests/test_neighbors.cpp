@@ -143,6 +143,22 @@ TEST_CASE("small boxes: fewer than 3 cells fall back correctly, too-small boxes 
   CHECK_THROWS_AS(trees::neighbor_pairs_bruteforce(c.x, c.a, d3, 0.6), std::invalid_argument);
 }
 
+TEST_CASE("nearest_image_pairs: the cell list where it applies, every pair's nearest image in any box") {
+  const Config c = random_config(40, Vec3(6, 6, 6), 1.0, 1.0, 3);
+  const Domain fits = periodic_box(Vec3(6.0, 6.0, 6.0), 0.3);
+  require_same(trees::nearest_image_pairs(c.x, c.a, fits, 0.5), trees::neighbor_pairs(c.x, c.a, fits, 0.5));
+  // Range 3.2 > L/2 = 2.5: the pair list proper is refused; here each pair counts once, by the
+  // definition (minimum-image distance below gap + a_i + a_j) written out independently.
+  const Domain small = periodic_box(Vec3(5.0, 5.0, 5.0), 0.3);
+  const auto got = trees::nearest_image_pairs(c.x, c.a, small, 1.2);
+  std::size_t expected = 0;
+  for (std::size_t i = 0; i < c.x.size(); ++i)
+    for (std::size_t j = i + 1; j < c.x.size(); ++j)
+      if (small.minimum_image(c.x[i] - c.x[j]).norm() < 1.2 + c.a[i] + c.a[j]) ++expected;
+  CHECK(got.size() == expected);
+  for (const auto& p : got) CHECK(p.dist == doctest::Approx(small.minimum_image(c.x[std::size_t(p.i)] - c.x[std::size_t(p.j)]).norm()));
+}
+
 TEST_CASE("degenerate inputs") {
   Domain open;
   CHECK(trees::neighbor_pairs({}, {}, open, 1.0).empty());

@@ -138,6 +138,19 @@ std::vector<NeighborPair> neighbor_pairs_bruteforce(const std::vector<Vec3>& x,
   return pairs;
 }
 
+std::vector<NeighborPair> nearest_image_pairs(const std::vector<Vec3>& x, const std::vector<double>& radius,
+                                              const Domain& domain, double cutoff_gap) {
+  check_inputs(x, radius);
+  const double range = cutoff_gap + 2.0 * max_radius(radius);
+  if (!domain.periodic() || range <= 0.5 * domain.box.minCoeff()) return neighbor_pairs(x, radius, domain, cutoff_gap);
+  std::vector<NeighborPair> pairs;
+  NeighborPair p;
+  for (int i = 0; i < int(x.size()); ++i)
+    for (int j = i + 1; j < int(x.size()); ++j)
+      if (pair_in_range(x, radius, domain, cutoff_gap, i, j, p)) pairs.push_back(p);
+  return pairs;
+}
+
 std::vector<NeighborPair> neighbor_pairs(const std::vector<Vec3>& x, const std::vector<double>& radius,
                                          const Domain& domain, double cutoff_gap) {
   check_inputs(x, radius);

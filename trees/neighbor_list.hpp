@@ -36,6 +36,13 @@ struct NeighborPair {
 std::vector<NeighborPair> neighbor_pairs(const std::vector<Vec3>& x, const std::vector<double>& radius,
                                          const Domain& domain, double cutoff_gap);
 
+// Pairs within cutoff_gap counting only each pair's nearest image, in any box: the cell list, or in
+// a periodic box too small for it (range above half an edge, so few particles) the plain loop over
+// minimum images. For diagnostics and input checks; force and hydrodynamic kernels use
+// neighbor_pairs, which refuses such boxes.
+std::vector<NeighborPair> nearest_image_pairs(const std::vector<Vec3>& x, const std::vector<double>& radius,
+                                              const Domain& domain, double cutoff_gap);
+
 // Same result by the plain O(N^2) double loop: the reference the cell list is tested against.
 std::vector<NeighborPair> neighbor_pairs_bruteforce(const std::vector<Vec3>& x,
                                                     const std::vector<double>& radius,

@@ -102,17 +102,9 @@ std::vector<Overlap> initial_overlaps(const Scene& scene) {
   std::vector<Overlap> out;
   const auto& x = scene.positions;
   const auto& a = scene.radii;
-  try {
-    for (const auto& p : trees::neighbor_pairs(x, a, scene.domain, 0.0))
-      out.push_back({p.i, p.j, p.dist - a[std::size_t(p.i)] - a[std::size_t(p.j)]});
-  } catch (const std::invalid_argument&) {
-    // A periodic box below twice the contact range: the plain loop over minimum images.
-    out.clear();
-    for (std::size_t i = 0; i < x.size(); ++i)
-      for (std::size_t j = i + 1; j < x.size(); ++j) {
-        const double h = scene.domain.minimum_image(x[i] - x[j]).norm() - a[i] - a[j];
-        if (h < 0) out.push_back({int(i), int(j), h});
-      }
+  for (const auto& p : trees::nearest_image_pairs(x, a, scene.domain, 0.0)) {
+    const double h = p.dist - a[std::size_t(p.i)] - a[std::size_t(p.j)];
+    if (h < 0) out.push_back({p.i, p.j, h});
   }
   return out;
 }
@@ -254,18 +246,7 @@ StiffnessBound stiffness_bound(const Scene& scene, const ResolvedModel& model) {
 
 DisplacementBound displacement_bound(const Scene& scene, const std::vector<Vec3>& u) {
   DisplacementBound d;
-  std::vector<trees::NeighborPair> pairs;
-  try {
-    pairs = trees::neighbor_pairs(scene.positions, scene.radii, scene.domain, 1.0);
-  } catch (const std::invalid_argument&) {
-    // Periodic box below twice the search range: the plain loop over minimum images.
-    for (std::size_t i = 0; i < scene.positions.size(); ++i)
-      for (std::size_t j = i + 1; j < scene.positions.size(); ++j) {
-        const Vec3 r = scene.domain.minimum_image(scene.positions[i] - scene.positions[j]);
-        if (r.norm() < 1.0 + scene.radii[i] + scene.radii[j]) pairs.push_back({int(i), int(j), r, r.norm()});
-      }
-  }
-  for (const auto& p : pairs) {
+  for (const auto& p : trees::nearest_image_pairs(scene.positions, scene.radii, scene.domain, 1.0)) {
     const std::size_t i = std::size_t(p.i), j = std::size_t(p.j);
     const double h = p.dist - scene.radii[i] - scene.radii[j];
     if (h <= 0 || p.dist <= 0) continue;
