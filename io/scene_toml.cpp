@@ -1,6 +1,7 @@
 #include "io/scene_toml.hpp"
 
 #include "engine/core/errors.hpp"
+#include "engine/core/memory.hpp"
 #include "io/h5md.hpp"
 #include "io/xyz.hpp"
 #include "trees/neighbor_list.hpp"
@@ -10,6 +11,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -86,6 +88,7 @@ class Reader {
     if (!n) return def;
     auto s = n->value_exact<std::string>();
     if (!s) fail(n, where(table, key), "expected a string, got " + type_name(*n));
+    check_length(n, where(table, key), *s);
     if (std::find(allowed.begin(), allowed.end(), *s) == allowed.end())
       fail(n, where(table, key), "\"" + *s + "\" is not one of " + quoted_list(allowed));
     return *s;
@@ -96,7 +99,17 @@ class Reader {
     if (!n) return def;
     auto s = n->value_exact<std::string>();
     if (!s) fail(n, where(table, key), "expected a string, got " + type_name(*n));
+    check_length(n, where(table, key), *s);
     return *s;
+  }
+
+  // Every string value (names, paths, the author) is at most kMaxString bytes: longer ones are
+  // mistakes, and some end up in HDF5 attributes, which cannot hold them.
+  static constexpr std::size_t kMaxString = 4096;
+  void check_length(const toml::node* n, const std::string& w, const std::string& s) const {
+    if (s.size() > kMaxString)
+      fail(n, w, "a string of " + std::to_string(s.size()) + " bytes (allowed at most " + std::to_string(kMaxString) +
+                     " bytes)");
   }
 
   template <class E>
@@ -168,6 +181,7 @@ class Reader {
 // kMaxCount generated particles.
 constexpr double kMinRadius = 1e-3, kMaxRadius = 1e3, kMaxRadiusRatio = 100.0, kMaxBoxEdge = 1e6;
 constexpr long kMaxCount = 10000000;
+constexpr double kRandomMaxPhi = 0.6;  // generate = "random" (trees/placement.cpp refuses beyond it too)
 
 const toml::table& sub(const Reader& r, const toml::table& root, const std::string& name) {
   static const toml::table empty;
@@ -233,11 +247,17 @@ void read_particles(const Reader& R, const toml::table& t, Scene& s, const std::
         if (frames.empty()) throw std::runtime_error(path + ": no frames");
         s.positions = frames.back().position;
         s.radii = frames.back().radius;
-        if (s.radii.empty()) s.radii.assign(s.positions.size(), R.number(t, T, "radius", 1.0, kMinRadius, kMaxRadius));
       }
     } catch (const std::exception& e) {
       R.fail(t.get("file"), "[particles] file", e.what());
     }
+    // `radius` sizes only a file without radii; beside a file that has them it would be ignored.
+    const double radius = R.number(t, T, "radius", 1.0, kMinRadius, kMaxRadius);
+    if (t.contains("radius") && !s.radii.empty())
+      R.fail(t.get("radius"), "[particles] radius",
+             "the file " + path + " gives a radius per particle; radius applies only to a file without radii "
+             "(allowed: remove radius, or the file's radius column)");
+    if (s.radii.empty()) s.radii.assign(s.positions.size(), radius);
   } else {
     PlacementParams p;
     p.pattern = R.choice(t, T, "generate", "random", {"random", "lattice"}) == "lattice"
@@ -288,12 +308,53 @@ void read_particles(const Reader& R, const toml::table& t, Scene& s, const std::
       if (!t.contains("count")) R.fail(&t, "[particles] count", "required with generate in an open domain");
       p.count = R.integer(t, T, "count", 0, 1, kMaxCount);
     }
+    // Memory of the generated particles, checked before any is placed (docs/reliability.md).
+    if (const MemoryBudget mb = memory_budget(); mb.known() && kBytesPerParticle * double(p.count) > mb.bytes) {
+      const bool by_count = t.contains("count");
+      R.fail(t.get(by_count ? "count" : "volume_fraction"), by_count ? "[particles] count" : "[particles] volume_fraction",
+             std::to_string(p.count) + " particles need about " + format_bytes(kBytesPerParticle * double(p.count)) +
+                 " of memory before any hydrodynamics (" + format_bytes(kBytesPerParticle) +
+                 " each), but only " + format_bytes(mb.bytes) + " is available (" + mb.source +
+                 ") (allowed: at most " + std::to_string(long(mb.bytes / kBytesPerParticle)) + " particles here)");
+    }
+    // The volume fraction a generator can reach (docs/scene.md, docs/configurations.md): "random" up
+    // to kRandomMaxPhi (kRsaMaxVolumeFraction without equilibration); "lattice" while the simple
+    // cubic spacing leaves every pair min_gap apart (at most pi/6 for one size). Checked here, before
+    // any placement work, and a placement failure is reported against the key that sets the
+    // fraction (volume_fraction, or count in a periodic box given by count).
+    const char* phi_key = t.contains("volume_fraction") || !t.contains("count") ? "volume_fraction" : "count";
+    const std::string phi_where = std::string("[particles] ") + phi_key;
+    const toml::node* phi_node = t.get(phi_key) ? t.get(phi_key) : t.get("generate");
+    double phi = p.volume_fraction;
+    if (s.domain.periodic()) {
+      double mean_a3 = p.radius * p.radius * p.radius;
+      if (p.sizes == PlacementParams::Sizes::bidisperse)
+        mean_a3 *= 1.0 - p.large_fraction + p.large_fraction * std::pow(p.radius_ratio, 3);
+      else if (p.sizes == PlacementParams::Sizes::lognormal)
+        mean_a3 *= std::exp(4.5 * p.sigma * p.sigma);
+      phi = double(p.count) * 4.0 / 3.0 * kPi * mean_a3 / s.domain.box.prod();
+    }
+    const std::string limits =
+        "allowed: generate = \"random\" up to volume fraction " + Reader::brief(kRandomMaxPhi) + " (" +
+        Reader::brief(kRsaMaxVolumeFraction) + " with equilibration_sweeps = 0); \"lattice\" while the lattice "
+        "spacing is at least 2 a_max + min_gap, for one size up to pi/6 (2a/(2a + min_gap))^3 = " +
+        Reader::brief(kPi / 6 * std::pow(2 * p.radius / (2 * p.radius + p.min_gap), 3)) + " in an open sphere";
+    if (p.pattern == PlacementParams::Pattern::random) {
+      const double cap = p.equilibration_sweeps == 0 ? kRsaMaxVolumeFraction : kRandomMaxPhi;
+      if (phi > cap * (1 + 1e-9)) {
+        std::ostringstream o;
+        o << "volume fraction " << phi << (s.domain.periodic() && !t.contains("volume_fraction") ? " (from count)" : "")
+          << " is beyond what random placement reaches (" << limits << ")";
+        R.fail(phi_node, phi_where, o.str());
+      }
+    }
     try {
       const Placement pl = place_particles(p, s.domain.periodic() ? s.domain.box : Vec3::Zero());
       s.positions = pl.position;
       s.radii = pl.radius;
     } catch (const std::invalid_argument& e) {
-      R.fail(t.get("generate"), "[particles] generate", e.what());
+      R.fail(phi_node, phi_where + " (generate = \"" + R.choice(t, T, "generate", "random", {"random", "lattice"}) + "\")",
+             std::string(e.what()) + " (" + limits + ")");
     }
   }
   s.fixed.assign(s.positions.size(), 0);
@@ -488,8 +549,32 @@ Scene parse_scene(const std::string& text, const std::string& source) {
   try {
     root = toml::parse(text, source);
   } catch (const toml::parse_error& e) {
+    // The offending line is quoted (shortened, bytes outside printable ASCII as \xNN), so that the
+    // message names the key even when the parser's description does not.
+    const auto line_no = e.source().begin.line;
+    std::string quoted;
+    std::size_t begin = 0;
+    for (std::size_t k = 1; k < line_no && begin != std::string::npos; ++k) {
+      begin = text.find('\n', begin);
+      if (begin != std::string::npos) ++begin;
+    }
+    if (line_no >= 1 && begin != std::string::npos && begin < text.size()) {
+      const std::size_t end = std::min(text.find('\n', begin), text.size());
+      for (std::size_t k = begin; k < end && quoted.size() < 80; ++k) {
+        const unsigned char ch = static_cast<unsigned char>(text[k]);
+        if (ch >= 0x20 && ch < 0x7f) {
+          quoted += char(ch);
+        } else {
+          char buf[8];
+          std::snprintf(buf, sizeof buf, "\\x%02X", ch);
+          quoted += buf;
+        }
+      }
+      if (end - begin > 80) quoted += "...";
+    }
     std::ostringstream o;
-    o << source << ":" << e.source().begin.line << ": TOML syntax error: " << e.description();
+    o << source << ":" << line_no << ": TOML syntax error: " << e.description();
+    if (!quoted.empty()) o << " (in the line: " << quoted << ")";
     throw ConfigError(o.str());
   }
   return parse_scene(root, source);
@@ -499,7 +584,7 @@ Scene parse_scene(const toml::table& root, const std::string& source) {
   Scene s;
   s.source = source;
   Reader R(source, &s.lines);
-  R.only(root, "top level", {"domain", "fluid", "particles", "forces", "flow", "hydrodynamics", "brownian", "time", "output"});
+  R.only(root, "top level", {"domain", "fluid", "particles", "forces", "flow", "hydrodynamics", "brownian", "time", "output", "run"});
 
   const toml::table& dom = sub(R, root, "domain");
   R.only(dom, "domain", {"kind", "box", "shear_strain"});
@@ -604,6 +689,10 @@ Scene parse_scene(const toml::table& root, const std::string& source) {
   R.only(br, "brownian", {"seed"});
   s.seed = std::uint64_t(R.integer(br, "brownian", "seed", 1, 0, std::numeric_limits<long>::max()));
 
+  const toml::table& rn = sub(R, root, "run");  // failure policy (docs/reliability.md)
+  R.only(rn, "run", {"max_overlap"});
+  s.run.max_overlap = R.number(rn, "run", "max_overlap", 0.5, 0.0, 2.0);
+
   const toml::table& ti = sub(R, root, "time");
   R.only(ti, "time", {"dt", "steps", "integrator", "rkf_tolerance", "start_step", "start_time"});
   s.time.dt = R.number(ti, "time", "dt", 1e-3, 0.0, 1e12, true);
@@ -631,6 +720,7 @@ Scene parse_scene(const toml::table& root, const std::string& source) {
       s.output.xyz = *b;
       s.output.xyz_path.clear();
     } else if (const auto p = xn->value_exact<std::string>()) {
+      R.check_length(xn, "[output] xyz", *p);
       s.output.xyz = !p->empty();  // "" (written by 0.1.0 for no export) = false
       s.output.xyz_path = *p;
     } else {
@@ -646,6 +736,7 @@ Scene parse_scene(const toml::table& root, const std::string& source) {
     for (const auto& e : *a) {
       auto v = e.value_exact<std::string>();
       if (!v) R.fail(&e, "[output] record", "expected a string, got " + Reader::type_name(e));
+      R.check_length(&e, "[output] record", *v);
       names.insert(*v);
     }
     s.output.record.assign(names.begin(), names.end());
@@ -720,6 +811,7 @@ std::string resolved_toml(const Scene& s) {
                                            {"lubrication_cutoff", s.hydro.lubrication_cutoff},
                                            {"lubrication_min_gap", s.hydro.lubrication_min_gap}});
   root.insert("brownian", toml::table{{"seed", int64_t(s.seed)}});
+  root.insert("run", toml::table{{"max_overlap", s.run.max_overlap}});
   root.insert("time", toml::table{{"dt", s.time.dt},
                                   {"steps", int64_t(s.time.steps)},
                                   {"start_step", int64_t(s.time.start_step)},

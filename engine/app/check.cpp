@@ -5,6 +5,7 @@
 #include "engine/core/output.hpp"
 #include "engine/observers.hpp"
 #include "engine/pair_forces.hpp"
+#include "engine/resources.hpp"
 #include "trees/neighbor_list.hpp"
 
 #include <omp.h>
@@ -365,6 +366,19 @@ int check(Simulation& sim, const CheckOptions& opt, std::FILE* out) {
       std::fprintf(out, "  no overlapping pairs; smallest gap %.4g a\n", gaps.min_gap);
     else
       std::fprintf(out, "  no overlapping pairs; no pair closer than 1 a\n");
+  }
+
+  // Resources (the CLI has refused the scene already when the peak exceeds the available memory).
+  {
+    const ResourceEstimate est = estimate_resources(s, model);
+    const MemoryBudget budget = memory_budget();
+    std::fprintf(out, "resources (estimate; docs/reliability.md):\n%s\n", est.describe("  ").c_str());
+    if (budget.known())
+      std::fprintf(out, "  available memory: %s (%s); the peak is %.3g%% of it%s\n", format_bytes(budget.bytes).c_str(),
+                   budget.source.c_str(), 100.0 * est.peak_bytes / budget.bytes,
+                   est.peak_bytes > kMemoryWarnFraction * budget.bytes ? " (WARNING: above half)" : "");
+    else
+      std::fprintf(out, "  available memory: unknown (no /proc/meminfo, no STOKESIAN_MEMORY_LIMIT)\n");
   }
 
   // Cost.

@@ -4,6 +4,7 @@
 #include "engine/app/run.hpp"
 #include "engine/core/errors.hpp"
 #include "engine/progress.hpp"
+#include "engine/resources.hpp"
 #include "engine/simulation.hpp"
 #include "io/scene_toml.hpp"
 #include "stokesian/build_info.hpp"
@@ -18,6 +19,8 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <new>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -70,11 +73,38 @@ std::string default_out(const std::string& scene) { return fs::path(scene).stem(
 
 void report(const char* kind, const std::exception& e) { std::fprintf(stderr, "stokesian: %s: %s\n", kind, e.what()); }
 
+// What a scene command was doing, and its resource estimate once made: named when memory runs out.
+struct Activity {
+  std::string doing = "loading the scene";
+  std::optional<ResourceEstimate> estimate;
+};
+
+// Out of memory despite the estimate (or before it could be made): exit status 5, naming what was
+// being done and the estimate (docs/cli.md).
+int out_of_memory(const Activity& a) {
+  const MemoryBudget budget = memory_budget();
+  std::string est = "no estimate was made yet";
+  if (a.estimate && !a.estimate->components.empty()) {
+    const ResourceComponent& big = a.estimate->largest();
+    est = "the estimated peak was " + format_bytes(a.estimate->peak_bytes) + " (largest part: " + big.name + ", " +
+          format_bytes(big.bytes) + ")";
+  }
+  std::fprintf(stderr,
+               "stokesian: out of memory while %s: %s; available now: %s (%s). The estimate missed what this scene "
+               "needs: please report it with the scene (docs/reliability.md); lower the particle count or the "
+               "accuracy, or run on a machine with more memory\n",
+               a.doing.c_str(), est.c_str(), budget.known() ? format_bytes(budget.bytes).c_str() : "unknown",
+               budget.source.c_str());
+  return 5;
+}
+
 // Runs the scene commands, mapping errors to exit statuses.
 template <class F>
-int guarded(F&& f) {
+int guarded(const Activity& activity, F&& f) {
   try {
     return f();
+  } catch (const std::bad_alloc&) {
+    return out_of_memory(activity);
   } catch (const ConfigError& e) {
     report("error", e);
     return 2;
@@ -164,7 +194,8 @@ int main_cli(int argc, char** argv) {
   app.set_version_flag("--version", version, "Print the version and build, then exit");
   app.require_subcommand(1);  // one of run, solve, check, plot
   app.footer(
-      "Exit status: 0 success, 1 usage, 2 scene/config error, 3 physics error, 4 file error.\n"
+      "Exit status: 0 success, 1 usage, 2 scene/config error (also: more memory than available), 3 physics error,\n"
+      "4 file error, 5 out of memory although the estimate fitted.\n"
       "Run `stokesian COMMAND --help` for the options of a command.");
 
   std::string scene, out, python, projection = "xy";
@@ -258,8 +289,17 @@ int main_cli(int argc, char** argv) {
   if (plot_cmd->parsed()) return plot(traj, out, python, std::stol(frame_text), projection);
   if (out.empty()) out = default_out(scene);
 
-  return guarded([&]() -> int {
-    Simulation sim(io::load_scene(scene));
+  Activity activity;
+  return guarded(activity, [&]() -> int {
+    // The resource estimate comes before anything large is allocated or any file is written; scene
+    // loading checks the memory of generated particles itself before placing them.
+    Scene loaded = io::load_scene(scene);
+    activity.doing = "resolving the model";
+    activity.estimate = estimate_resources(loaded, resolve_model(loaded));
+    require_resources(loaded, *activity.estimate, memory_budget(), quiet && !check->parsed() ? nullptr : stderr);
+    activity.doing = "building the simulation";
+    Simulation sim(std::move(loaded));
+    activity.doing = check->parsed() ? "checking the scene" : solve->parsed() ? "solving" : "running";
     if (check->parsed()) {
       CheckOptions opt;
       opt.out = out;
