@@ -60,7 +60,7 @@ class Reader {
     double v;
     if (auto i = n->value_exact<int64_t>()) v = double(*i);
     else if (auto d = n->value_exact<double>()) v = *d;
-    else fail(n, where(table, key), "expected a number, got " + type_name(*n));
+    else fail(n, where(table, key), "expected a number, got " + type_name(*n) + " (allowed " + range(lo, hi, lo_open) + ")");
     if (!(v >= lo && v <= hi) || (lo_open && v == lo)) {
       std::ostringstream o;
       o << "value " << v << " out of range (allowed " << (lo_open ? "(" : "[") << lo << ", " << hi << "])";
@@ -73,7 +73,10 @@ class Reader {
     const toml::node* n = get(t, table, key);
     if (!n) return def;
     auto i = n->value_exact<int64_t>();
-    if (!i) fail(n, where(table, key), "expected an integer, got " + type_name(*n));
+    if (!i)
+      fail(n, where(table, key),
+           "expected an integer, got " + type_name(*n) + " (allowed an integer in [" + std::to_string(lo) + ", " +
+               std::to_string(hi) + "])");
     if (*i < lo || *i > hi) {
       std::ostringstream o;
       o << "value " << *i << " out of range (allowed [" << lo << ", " << hi << "])";
@@ -152,6 +155,11 @@ class Reader {
   }
 
   static std::string where(const std::string& table, const std::string& key) { return "[" + table + "] " + key; }
+  static std::string range(double lo, double hi, bool lo_open) {
+    std::ostringstream o;
+    o << (lo_open ? "(" : "[") << lo << ", " << hi << "]";
+    return o.str();
+  }
   static std::string brief(double v) {
     std::ostringstream o;
     o << v;

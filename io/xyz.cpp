@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
@@ -171,7 +172,9 @@ std::vector<Scanned> scan(const std::string& path, Stop stop) {
         if (i > 0 && fr.radius.size() != static_cast<std::size_t>(i))
           throw IoError(where() + ": radius column present on some lines only");
         const double a = to_double(t[static_cast<std::size_t>(rc)], where(), "a radius");
-        if (!(a > 0.0)) throw IoError(where() + ": radius must be positive");
+        if (!(a > 0.0) || !std::isfinite(a))
+          throw IoError(where() + ": radius " + t[static_cast<std::size_t>(rc)] +
+                        " of particle " + std::to_string(i) + " (allowed: a finite number > 0)");
         fr.radius.push_back(a);
       } else if (!fr.radius.empty()) {
         throw IoError(where() + ": radius column present on some lines only");

@@ -245,7 +245,8 @@ TEST_CASE("pathological TOML texts are refused before parsing, naming the line a
   e = error_of(kTwo + "# " + std::string(17u << 20, 'x') + "\n");
   CHECK(contains(e, "allowed at most 16777216 bytes"));
   // Dots and brackets inside strings, comments and numbers are not structure.
-  const std::string ok = kTwo + "[output]\n# a.b.c [[[[ {{{\nauthor = \"" + parts + "[[[{{{\"\n";
+  // (Strings are at most 4096 bytes: 2000 dotted parts.)
+  const std::string ok = kTwo + "[output]\n# a.b.c [[[[ {{{\nauthor = \"" + parts.substr(0, 4000) + "[[[{{{\"\n";
   CHECK(error_of(ok) == "");
   CHECK(error_of(kTwo + "[forces]\nexternal_force = [[0.5, 0.25, 1.5], [0.5, 0.25, 1.5]]\n"
                         "[[forces.pair]]\nkind = 'hertz'\n[output]\nauthor = '''x.y\n\"z]'''\n") == "");
@@ -330,4 +331,106 @@ TEST_CASE("periodic box edges and the count implied by volume_fraction are bound
   e = error_of("[domain]\nkind = \"periodic\"\nbox = [3, 3, 3]\n[particles]\ngenerate = \"lattice\"\n"
                "volume_fraction = 0.001\n");
   CHECK(contains(e, "= 0 in this box"));
+}
+
+namespace {
+
+// The ConfigError of the scene `text` written as s.toml beside the files `files` (name, content).
+std::string file_error_of(const std::string& text, const std::vector<std::pair<std::string, std::string>>& files) {
+  const auto dir = std::filesystem::temp_directory_path() / "stokesian_test_scene_files";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  for (const auto& [name, body] : files) std::ofstream(dir / name) << body;
+  std::ofstream(dir / "s.toml") << text;
+  std::string e;
+  try {
+    io::load_scene((dir / "s.toml").string());
+  } catch (const ConfigError& err) {
+    e = err.what();
+  }
+  std::filesystem::remove_all(dir);
+  return e;
+}
+
+const std::string kXyzWithRadii = "2\nProperties=species:S:1:pos:R:3:radius:R:1\nA 0 0 0 1.0\nA 4 0 0 1.5\n";
+
+}  // namespace
+
+// Fuzz finding (issue 10): `radius` beside a file with a radius column was ignored without a word,
+// and its value was never checked (radius = inf passed).
+TEST_CASE("radius beside a particle file that has radii is refused; beside one without, it is checked") {
+  std::string e = file_error_of("[particles]\nfile = \"p.xyz\"\nradius = 2.0\n", {{"p.xyz", kXyzWithRadii}});
+  CHECK(contains(e, "s.toml:3: [particles] radius"));
+  CHECK(contains(e, "p.xyz gives a radius per particle"));
+  CHECK(contains(e, "allowed"));
+  e = file_error_of("[particles]\nfile = \"p.xyz\"\nradius = inf\n", {{"p.xyz", kXyzWithRadii}});
+  CHECK(contains(e, "[particles] radius"));
+  CHECK(contains(e, "allowed [0.001, 1000]"));
+  const std::string plain = "2\ncomment\nA 0 0 0\nA 4 0 0\n";
+  e = file_error_of("[particles]\nfile = \"p.xyz\"\nradius = nan\n", {{"p.xyz", plain}});
+  CHECK(contains(e, "[particles] radius"));
+  CHECK(contains(e, "allowed [0.001, 1000]"));
+  CHECK(file_error_of("[particles]\nfile = \"p.xyz\"\nradius = 1.5\n", {{"p.xyz", plain}}) == "");
+  CHECK(file_error_of("[particles]\nfile = \"p.xyz\"\n", {{"p.xyz", kXyzWithRadii}}) == "");
+}
+
+// Fuzz finding: a non-positive or non-finite radius in an XYZ file said "radius must be positive"
+// without the value, the particle or what is allowed.
+TEST_CASE("a bad radius in an XYZ file names the file, line, particle, value and what is allowed") {
+  const std::string e = file_error_of("[particles]\nfile = \"p.xyz\"\n",
+                                      {{"p.xyz", "2\nProperties=species:S:1:pos:R:3:radius:R:1\nA 0 0 0 1\nA 4 0 0 -2\n"}});
+  CHECK(contains(e, "s.toml:2: [particles] file"));
+  CHECK(contains(e, "p.xyz:4"));
+  CHECK(contains(e, "radius -2 of particle 1"));
+  CHECK(contains(e, "allowed: a finite number > 0"));
+}
+
+// Fuzz finding: a volume fraction beyond what the generator reaches was reported against
+// `generate` (not the key that sets it) and without the allowed limit; a periodic count far beyond
+// it ran the placement first.
+TEST_CASE("volume fractions beyond what a generator reaches are refused naming the key and the limit") {
+  std::string e = error_of("[particles]\ngenerate = \"random\"\ncount = 20\nvolume_fraction = 0.7\n");
+  CHECK(contains(e, "bad.toml:4: [particles] volume_fraction"));
+  CHECK(contains(e, "allowed: generate = \"random\" up to volume fraction 0.6"));
+  e = error_of("[particles]\ngenerate = \"random\"\ncount = 20\nvolume_fraction = 0.4\nequilibration_sweeps = 0\n");
+  CHECK(contains(e, "[particles] volume_fraction"));
+  CHECK(contains(e, "0.35 with equilibration_sweeps = 0"));
+  // A periodic box given by count: the count implies the fraction (here 10^6 spheres in 10^3 a^3).
+  e = error_of("[domain]\nkind = \"periodic\"\nbox = [10, 10, 10]\n[particles]\ngenerate = \"random\"\ncount = 1000000\n");
+  CHECK(contains(e, "bad.toml:6: [particles] count"));
+  CHECK(contains(e, "(from count)"));
+  CHECK(contains(e, "allowed"));
+  // Lattice: simple cubic spacing below 2 a + min_gap.
+  e = error_of("[particles]\ngenerate = \"lattice\"\ncount = 27\nvolume_fraction = 0.6\n");
+  CHECK(contains(e, "bad.toml:4: [particles] volume_fraction (generate = \"lattice\")"));
+  CHECK(contains(e, "lattice spacing"));
+  CHECK(contains(e, "pi/6"));
+  e = error_of("[domain]\nkind = \"periodic\"\nbox = [12, 12, 12]\n[particles]\ngenerate = \"lattice\"\nvolume_fraction = 0.5\n");
+  CHECK(contains(e, "[particles] volume_fraction"));
+  CHECK(contains(e, "allowed"));
+  CHECK(error_of("[particles]\ngenerate = \"lattice\"\ncount = 27\nvolume_fraction = 0.5\n") == "");
+}
+
+// Fuzz findings: a TOML syntax error (e.g. an integer beyond 64 bits) named the line but not the
+// key; strings had no length limit (a 1 MiB author made solve fail writing its HDF5 attribute); type
+// errors did not say what is allowed.
+TEST_CASE("syntax errors quote the line, strings are bounded, type errors give the allowed range") {
+  std::string e = error_of(kTwo + "[time]\nsteps = 99999999999999999999\n");
+  CHECK(contains(e, "bad.toml:4: TOML syntax error"));
+  CHECK(contains(e, "(in the line: steps = 99999999999999999999)"));
+  e = error_of(kTwo + "[time]\ndt = 1\ndt = 2\n");
+  CHECK(contains(e, "bad.toml:5"));
+  CHECK(contains(e, "dt = 2"));
+  e = error_of(kTwo + "[output]\nauthor = \"a\x01\"\n");  // a control byte: quoted as \x01
+  CHECK(contains(e, "\\x01"));
+  e = error_of(kTwo + "[output]\nauthor = \"" + std::string(5000, 'A') + "\"\n");
+  CHECK(contains(e, "bad.toml:4: [output] author"));
+  CHECK(contains(e, "a string of 5000 bytes (allowed at most 4096 bytes)"));
+  CHECK(error_of(kTwo + "[output]\nauthor = \"" + std::string(4096, 'A') + "\"\n") == "");
+  e = error_of(kTwo + "[output]\nxyz = \"" + std::string(5000, 'x') + "\"\n");
+  CHECK(contains(e, "[output] xyz"));
+  e = error_of(kTwo + "[brownian]\nseed = nan\n");
+  CHECK(contains(e, "[brownian] seed: expected an integer, got a float (allowed an integer in [0, "));
+  e = error_of(kTwo + "[time]\ndt = \"x\"\n");
+  CHECK(contains(e, "[time] dt: expected a number, got a string (allowed (0, 1e+12])"));
 }
