@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <sstream>
 
 namespace stokesian::io {
@@ -275,15 +276,58 @@ void write_xyz_frame(std::ostream& os, const Frame& f, const Domain& domain, con
   }
 }
 
+namespace {
+
+// Bytes of an XYZ file written by XyzWriter to keep when resuming at step `last`: every whole frame
+// up to the first one that is after `last` or incomplete (a kill can cut the file anywhere: inside
+// a line, between lines or frames). A line counts only when its newline is there. Throws when a
+// complete frame is not one XyzWriter writes (no particle count, or no Step= on its comment line).
+std::streamoff resumable_bytes(const std::string& path, std::int64_t last) {
+  std::ifstream is(path, std::ios::binary);
+  if (!is) throw IoError(path + ": cannot open the XYZ file to resume it (" + std::strerror(errno) + ")");
+  std::streamoff keep = 0, pos = 0;
+  std::size_t lineno = 0;
+  std::string line;
+  // The next complete line, or false at the end of the file or before a line without its newline.
+  auto next = [&]() {
+    if (!std::getline(is, line) || is.eof()) return false;
+    pos += static_cast<std::streamoff>(line.size()) + 1;
+    ++lineno;
+    return true;
+  };
+  auto bad = [&](const std::string& what) {
+    return IoError(path + ":" + std::to_string(lineno) + ": " + what +
+                   "; cannot resume this XYZ export (not one written by stokesian run; move it away to resume: the new file then starts after the checkpoint, the trajectory holds every frame)");
+  };
+  while (next()) {
+    if (line.empty()) {  // blank lines between frames are kept
+      keep = pos;
+      continue;
+    }
+    char* end = nullptr;
+    const long long n = std::strtoll(line.c_str(), &end, 10);
+    if (end == line.c_str() || *end != '\0' || n < 0) throw bad("expected the particle count, found \"" + line + "\"");
+    if (!next()) break;
+    const auto at = line.find(" Step=");
+    if (at == std::string::npos) throw bad("the comment line has no Step=");
+    if (std::strtoll(line.c_str() + at + 6, nullptr, 10) > last) break;
+    bool whole = true;
+    for (long long i = 0; i < n && whole; ++i) whole = next();
+    if (!whole) break;
+    keep = pos;
+  }
+  return keep;
+}
+
+}  // namespace
+
 XyzWriter::XyzWriter(std::string path, Domain domain, std::vector<std::string> species,
                      std::optional<std::int64_t> keep_until_step)
     : path_(std::move(path)), domain_(domain), species_(std::move(species)) {
   if (keep_until_step && detail::exists(path_)) {
-    // Find the first frame after the checkpoint and keep only the bytes before it.
-    const std::int64_t last = *keep_until_step;
-    auto frames = scan(path_, [last](const XyzFrame& f) { return f.step && *f.step > last; });
-    if (!frames.empty() && frames.back().frame.step && *frames.back().frame.step > last) {
-      const std::streamoff cut = frames.back().offset;
+    // Keep the whole frames up to the checkpoint; drop later frames and a frame a kill cut short.
+    const std::streamoff cut = resumable_bytes(path_, *keep_until_step);
+    if (cut != static_cast<std::streamoff>(std::filesystem::file_size(path_))) {
       const std::string tmp = path_ + ".tmp";
       {
         std::ifstream in(path_, std::ios::binary);
@@ -305,13 +349,20 @@ XyzWriter::XyzWriter(std::string path, Domain domain, std::vector<std::string> s
 }
 
 void XyzWriter::write(const Frame& f) {
-  write_xyz_frame(os_, f, domain_, species_);
+  // Each frame goes to the file at once, whole: the file then holds every frame recorded before a
+  // checkpoint when that checkpoint is written, whenever the process is killed.
+  std::ostringstream frame;
+  write_xyz_frame(frame, f, domain_, species_);
+  const std::string text = frame.str();
+  os_.write(text.data(), static_cast<std::streamsize>(text.size()));
+  os_.flush();
   if (!os_) throw IoError(path_ + ": writing the XYZ frame at step " + std::to_string(f.step) + " failed");
 }
 
 void XyzWriter::flush() {
   os_.flush();
   if (!os_) throw IoError(path_ + ": flushing the XYZ file failed");
+  detail::fsync_file(path_);
 }
 
 }  // namespace stokesian::io

@@ -46,8 +46,10 @@ std::vector<std::string> species_labels(const std::vector<double>& radius, const
 void write_xyz_frame(std::ostream& os, const Frame& f, const Domain& domain,
                      const std::vector<std::string>& species = {});
 
-// Streaming export for a run. On resume, open with `keep_until_step` to drop frames written
-// after the checkpoint (the file is rewritten atomically without them).
+// Streaming export for a run. Each frame reaches the file when it is written (a kill loses none of
+// the frames before a checkpoint); flush() also fsyncs. On resume, open with `keep_until_step` to
+// drop the frames after the checkpoint and a last frame a kill cut short (the file is rewritten
+// atomically without them).
 class XyzWriter {
  public:
   XyzWriter(std::string path, Domain domain, std::vector<std::string> species = {},
