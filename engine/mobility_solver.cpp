@@ -55,8 +55,9 @@ HydroResult MobilitySolver::solve(const HydroProblem& p) {
     const KrylovResult kr = conjugate_gradient(Mzz, b, z, tol_, cg_iteration_cap(b.size()));
     if (!kr.converged) {
       std::ostringstream o;
-      o << "constrained mobility solve (stresslets/fixed particles) did not converge: relative residual "
-        << kr.relative_residual << " after " << kr.iterations << " CG iterations (tolerance " << tol_ << ")";
+      o << "constrained mobility solve (stresslets/fixed particles) failed: conjugate gradients "
+        << describe(kr) << " after " << kr.iterations << " iterations, relative residual " << kr.relative_residual
+        << " (tolerance " << tol_ << ", cap " << cg_iteration_cap(b.size()) << ")";
       throw PhysicsError(o.str());
     }
     iterations = kr.iterations;
@@ -81,8 +82,9 @@ std::vector<Vec3> MobilitySolver::brownian_displacement(double kT, double dt, Rn
   const KrylovResult kr = lanczos_sqrt(M, w, y, tol_, kLanczosCap);
   if (!kr.converged) {
     std::ostringstream o;
-    o << "Lanczos square root of the far-field mobility did not converge (relative change " << kr.relative_residual
-      << " after " << kr.iterations << " iterations)";
+    o << "Lanczos square root of the far-field mobility (Brownian displacement) failed: it " << describe(kr)
+      << " after " << kr.iterations << " iterations, last relative change " << kr.relative_residual << " (tolerance "
+      << tol_ << ", cap " << kLanczosCap << ")";
     throw PhysicsError(o.str());
   }
   for (long i = 0; i < n_; ++i) dx[std::size_t(i)] = pref * y.segment<3>(i * d);

@@ -6,15 +6,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 namespace stokesian {
 
 namespace {
 
-// Range of the gap search [a]; min_gap reports this value when no pair is closer.
+// First range of the gap search [a]; doubled until a pair is found.
 constexpr double kGapSearchRange = 1.0;
-// Margin that keeps the search inside the minimum-image contract of trees/neighbor_list.hpp.
-constexpr double kImageMargin = 1e-9;
 
 const std::vector<std::string> kSymmetricComponents{"xx", "xy", "xz", "yy", "yz", "zz"};
 
@@ -102,7 +101,7 @@ class Gaps final : public Observer {
   void observe(const State& s, const Evaluation& ev, Frame& f) const override {
     const GapStats g = ev.gaps ? *ev.gaps : gap_statistics(s.position, s.radius, s.domain);
     f.set_count("overlaps", std::int64_t(g.overlaps));
-    f.set_scalar("min_gap", std::isfinite(g.min_gap) ? g.min_gap : kGapSearchRange, units::length);
+    f.set_scalar("min_gap", g.min_gap, units::length);
   }
 };
 
@@ -148,22 +147,60 @@ std::vector<std::unique_ptr<Observer>> make_observers(const Scene& scene, const 
   return obs;
 }
 
+GapSurvey survey_gaps(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain, double range,
+                      std::size_t keep) {
+  GapSurvey out;
+  out.stats.min_gap = INFINITY;
+  if (x.size() < 2) return out;
+  for (const auto& p : trees::nearest_image_pairs(x, a, domain, range)) {
+    const double ai = a[std::size_t(p.i)], aj = a[std::size_t(p.j)];
+    const double gap = p.dist - ai - aj;
+    if (!(gap < range)) continue;
+    ++out.within;
+    out.stats.min_gap = std::min(out.stats.min_gap, gap);
+    out.stats.overlaps += gap < 0;
+    if (keep > 0) out.worst.push_back({p.i, p.j, gap, -gap / std::min(ai, aj)});
+  }
+  // The `keep` deepest, ties by index (deterministic).
+  auto deeper = [](const PairGap& u, const PairGap& v) {
+    return u.depth != v.depth ? u.depth > v.depth : (u.i != v.i ? u.i < v.i : u.j < v.j);
+  };
+  if (out.worst.size() > keep) {
+    std::partial_sort(out.worst.begin(), out.worst.begin() + long(keep), out.worst.end(), deeper);
+    out.worst.resize(keep);
+  } else {
+    std::sort(out.worst.begin(), out.worst.end(), deeper);
+  }
+  return out;
+}
+
+std::string describe_pairs(const std::vector<PairGap>& pairs) {
+  std::string s;
+  char buf[160];
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    std::snprintf(buf, sizeof buf, "%s(%ld, %ld) gap %.3g a", k ? ", " : "", pairs[k].i, pairs[k].j, pairs[k].gap);
+    s += buf;
+    if (pairs[k].depth > 0) {
+      std::snprintf(buf, sizeof buf, " (overlap %.3g of the smaller radius)", pairs[k].depth);
+      s += buf;
+    }
+  }
+  return s;
+}
+
 GapStats gap_statistics(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain) {
-  double range = kGapSearchRange;
-  if (domain.periodic()) {
-    const double amax = *std::max_element(a.begin(), a.end());
-    range = std::min(range, 0.5 * domain.box.minCoeff() - 2.0 * amax - kImageMargin);
+  // Every gap is below the largest centre distance, which is below the diagonal of the particles'
+  // bounding box (open) or of the box (periodic): past it, no pair exists (a single particle).
+  Vec3 lo = x.empty() ? Vec3::Zero() : x[0], hi = lo;
+  for (const Vec3& p : x) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
   }
-  const auto pairs = range >= 0 ? trees::neighbor_pairs(x, a, domain, range)
-                                : trees::neighbor_pairs_bruteforce(x, a, domain, 0.0);
-  GapStats g;
-  g.min_gap = INFINITY;
-  for (const auto& p : pairs) {
-    const double gap = p.dist - a[std::size_t(p.i)] - a[std::size_t(p.j)];
-    g.min_gap = std::min(g.min_gap, gap);
-    g.overlaps += gap < 0;
+  const double limit = domain.periodic() ? domain.box.norm() : (hi - lo).norm();
+  for (double range = kGapSearchRange;; range *= 2.0) {
+    const GapSurvey s = survey_gaps(x, a, domain, range, 0);
+    if (s.within > 0 || range > limit || x.size() < 2) return s.stats;
   }
-  return g;
 }
 
 }  // namespace stokesian

@@ -10,9 +10,9 @@
 //                 (selected by [output] record, each when the model computes it);
 //                 force of a fixed particle = the force holding it (exerted on the fluid);
 //                 stresslet as 6 Cartesian components xx xy xz yy yz zz.
-//   observables:  overlaps (integer), min_gap (pairs closer than 1 a; NaN-free: 1.0 when no pair is that
-//                 close), pair_energy, krylov_iterations (integer), dt, stresslet_sum (FTS: sum of the
-//                 stresslets, 6 components).
+//   observables:  overlaps (integer), min_gap (the smallest surface gap of any pair, nearest periodic
+//                 image; +inf for a single particle), pair_energy, krylov_iterations (integer), dt,
+//                 stresslet_sum (FTS: sum of the stresslets, 6 components).
 #include "engine/core/frame.hpp"
 #include "engine/core/registry.hpp"
 #include "engine/core/scene.hpp"
@@ -49,8 +49,27 @@ const Registry<ParticleOutputEntry>& particle_outputs();
 // computes. Throws ConfigError naming [output] record for an unknown name.
 std::vector<std::unique_ptr<Observer>> make_observers(const Scene& scene, const ResolvedModel& model);
 
-// Surface-gap statistics over pairs closer than 1 a (reduced in small periodic boxes to what the
-// minimum image allows).
+// Surface-gap statistics: overlapping pairs, and the true smallest surface gap (searched within 1 a,
+// then in doubling ranges until a pair is found; nearest periodic image). +inf for one particle.
 GapStats gap_statistics(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain);
+
+// One pair of a gap survey: surface gap h = r - a_i - a_j [a], and the overlap depth -h as a
+// fraction of the smaller radius (negative when the pair does not overlap).
+struct PairGap {
+  long i = 0, j = 0;
+  double gap = 0.0;
+  double depth = 0.0;  // -h / min(a_i, a_j)
+};
+// The pairs with a surface gap below `range` [a], the `keep` closest first (by depth, i.e. by the
+// gap relative to the smaller radius), and their statistics (min_gap = +inf when none is in range).
+struct GapSurvey {
+  GapStats stats;
+  std::vector<PairGap> worst;
+  long within = 0;  // pairs found in range
+};
+GapSurvey survey_gaps(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain, double range,
+                      std::size_t keep);
+// "(i, j) gap h a (d of the smaller radius), ..." for messages.
+std::string describe_pairs(const std::vector<PairGap>& pairs);
 
 }  // namespace stokesian

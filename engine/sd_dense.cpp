@@ -8,6 +8,49 @@
 
 namespace stokesian {
 
+namespace {
+
+// First generalised entry m at which the Cholesky factorisation of the symmetric matrix A breaks
+// down: the smallest m whose leading (m+1) x (m+1) block is not positive definite (every leading
+// block of a positive definite matrix is positive definite, so bisection over the block size finds
+// it with O(log n) factorisations; called only after a failure). -1 when A is positive definite.
+long first_failing_entry(const MatX& A) {
+  long lo = 0, hi = A.rows();  // the leading lo x lo block is PD; the hi x hi block is not
+  if (Eigen::LLT<MatX>(A).info() == Eigen::Success) return -1;
+  while (hi - lo > 1) {
+    const long mid = (lo + hi) / 2;
+    if (Eigen::LLT<MatX>(A.topLeftCorner(mid, mid)).info() == Eigen::Success) lo = mid;
+    else hi = mid;
+  }
+  return hi - 1;
+}
+
+// "particle p (closest earlier particle q at surface gap h a, symmetric gap xi)": the failing entry's
+// particle p and, among the particles of the leading block that was still positive definite, the
+// one closest to it (the pair whose coupling broke the factorisation).
+std::string failing_particles(long p, const Configuration& c) {
+  std::ostringstream o;
+  o << "particle " << p;
+  long q = -1;
+  double best = 0.0, gap = 0.0;
+  for (long j = 0; j < p; ++j) {
+    const double r = c.domain.minimum_image(c.x[std::size_t(p)] - c.x[std::size_t(j)]).norm();
+    const double ai = c.a[std::size_t(p)], aj = c.a[std::size_t(j)];
+    const double xi = 2.0 * r / (ai + aj) - 2.0;
+    if (q < 0 || xi < best) {
+      best = xi;
+      gap = r - ai - aj;
+      q = j;
+    }
+  }
+  if (q >= 0) o << " (closest earlier particle " << q << ": pair (" << q << ", " << p << ") at surface gap " << gap
+                << " a, symmetric gap " << best << ")";
+  else o << " (its own block)";
+  return o.str();
+}
+
+}  // namespace
+
 DenseStokesianDynamics::DenseStokesianDynamics(std::unique_ptr<MobilityOperator> far_field, double mu,
                                                lubrication::NearFieldParams p)
     : m_(far_field->moments()), mu_(mu), op_(std::move(far_field)), near_(m_, mu, p) {}
@@ -30,7 +73,11 @@ void DenseStokesianDynamics::prepare(const Configuration& c) {
   const MatX* M = op_->dense();
   if (!M) throw std::logic_error(std::string("dense Stokesian dynamics needs a dense far field, not \"") + op_->name() + "\"");
   Eigen::LLT<MatX> llt(*M);
-  if (llt.info() != Eigen::Success) throw PhysicsError("far-field mobility is not positive definite");
+  if (llt.info() != Eigen::Success) {
+    const long e = first_failing_entry(*M);
+    throw PhysicsError("far-field mobility is not positive definite: its Cholesky factorisation fails at " +
+                       (e >= 0 ? failing_particles(e / dof_per_particle(m_), c) : std::string("an unknown entry")));
+  }
   R_ = llt.solve(MatX::Identity(M->rows(), M->cols()));
   stats_ = {};
   R_ += MatX(near_.assemble(c.x, c.a, c.domain, &stats_));
@@ -58,7 +105,13 @@ HydroResult DenseStokesianDynamics::solve(const HydroProblem& p) {
     for (std::size_t j = 0; j < v.size(); ++j) Rvv(long(i), long(j)) = R_(v[i], v[j]);
   }
   Eigen::LLT<MatX> llt(Rvv);
-  if (llt.info() != Eigen::Success) throw PhysicsError("SD resistance matrix is not positive definite");
+  if (llt.info() != Eigen::Success) {
+    const long e = first_failing_entry(Rvv);
+    throw PhysicsError("SD resistance matrix (far field + near field) is not positive definite: its Cholesky "
+                       "factorisation fails at " +
+                       (e >= 0 ? failing_particles(v[std::size_t(e)] / dof_per_particle(m_), p.config)
+                               : std::string("an unknown entry")));
+  }
   const VecX V = llt.solve(rhs);
   VecX gen = c.motion;  // full generalised motion [U - u_inf, Omega - Omega_inf, -E_inf]
   for (std::size_t i = 0; i < v.size(); ++i) gen[v[i]] = V[long(i)];

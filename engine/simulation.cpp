@@ -18,6 +18,29 @@ namespace {
 // Stored as State::rng_state: the noise needs no saved state, only the seed and the step
 // (checkpoints of 0.1.0 hold a Mersenne-Twister state here instead; see run()).
 const char* const kNoiseStreams = "philox4x32-10 streams (seed, brownian, step)";
+
+// Pairs named in overlap warnings and failure reports.
+constexpr std::size_t kReportedPairs = 5;
+
+std::string vec_text(const Vec3& v) {
+  char b[96];
+  std::snprintf(b, sizeof b, "(%.4g, %.4g, %.4g)", v[0], v[1], v[2]);
+  return b;
+}
+
+// First entry with a non-finite component, or -1.
+long first_non_finite(const std::vector<Vec3>& v) {
+  for (std::size_t i = 0; i < v.size(); ++i)
+    if (!v[i].allFinite()) return long(i);
+  return -1;
+}
+
+// "; closest pairs: ..." of configuration x (pairs within 1 a), for failures that name no particle.
+std::string closest_pairs(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& d) {
+  if (first_non_finite(x) >= 0 || x.size() < 2) return "";
+  const GapSurvey g = survey_gaps(x, a, d, 1.0, 3);
+  return g.worst.empty() ? "; no pair is closer than 1 a" : "; closest pairs: " + describe_pairs(g.worst);
+}
 }  // namespace
 
 Simulation::Simulation(Scene scene)
@@ -43,6 +66,21 @@ State Simulation::initial_state() const {
 }
 
 Evaluation Simulation::evaluate(const State& s, const std::vector<Vec3>& x, double t, bool diagnostics) {
+  return evaluate_checked(s, x, t, diagnostics, nullptr);
+}
+
+Evaluation Simulation::evaluate_checked(const State& s, const std::vector<Vec3>& x, double t, bool diagnostics,
+                                        GapSurvey* overlaps) {
+  // Where this evaluation is, for messages: the state of a step, or an integrator stage within it.
+  auto at = [&] {
+    std::ostringstream o;
+    o << "step " << s.step;
+    if (t != 0.0) o << " (integrator stage at t + " << t << ")";
+    return o.str();
+  };
+  if (const long i = first_non_finite(x); i >= 0)
+    throw PhysicsError(at() + ": particle " + std::to_string(i) + " has a non-finite position " +
+                       vec_text(x[std::size_t(i)]));
   // Stage t of a step: in a sheared box the lattice strain has advanced by rate * t (Lees &
   // Edwards 1972), so stages see the box of their own time.
   const Domain domain = strain_rate_ == 0.0 || t == 0.0 ? s.domain : s.domain.strained_by(strain_rate_ * t);
@@ -67,10 +105,46 @@ Evaluation Simulation::evaluate(const State& s, const std::vector<Vec3>& x, doub
   });
   g.add("hydro_setup", hydro_.solver().prepare_uses_threads(n) ? Kind::team : Kind::single, [&] { hydro_.prepare(c); });
   if (diagnostics) g.add("diagnostics", search, [&] { ev.gaps = gap_statistics(x, s.radius, domain); });
-  g.run(task_mode_);
+  if (overlaps) g.add("overlaps", search, [&] { *overlaps = survey_gaps(x, s.radius, domain, 0.0, kReportedPairs); });
+  // Overlap policy ([run] max_overlap): a pair deeper than the threshold stops the run before the
+  // solve, and explains a set-up failure (factorisation) that the overlap caused.
+  const double max_overlap = scene_.run.max_overlap;
+  auto too_deep = [&] { return overlaps && !overlaps->worst.empty() && overlaps->worst[0].depth > max_overlap; };
+  auto overlap_report = [&] {
+    std::vector<PairGap> deep;
+    for (const PairGap& p : overlaps->worst)
+      if (p.depth > max_overlap) deep.push_back(p);
+    std::ostringstream o;
+    o << at() << ": " << overlaps->stats.overlaps << " overlapping pair(s), the deepest beyond [run] max_overlap = "
+      << max_overlap << " of the smaller radius: " << describe_pairs(deep)
+      << " (surfaces must not interpenetrate this far: a smaller [time] dt or a stiffer short-range repulsion keeps "
+         "them apart)";
+    return o.str();
+  };
+  try {
+    g.run(task_mode_);
+  } catch (const PhysicsError& e) {
+    if (too_deep()) throw PhysicsError(overlap_report() + "; then: " + e.what());
+    throw PhysicsError(at() + ": " + e.what() + closest_pairs(x, s.radius, domain));
+  }
+  if (too_deep()) throw PhysicsError(overlap_report());
+  for (const auto* f : {&ev.force, &ev.torque})
+    if (const long i = first_non_finite(*f); i >= 0)
+      throw PhysicsError(at() + ": particle " + std::to_string(i) + " has a non-finite " +
+                         (f == &ev.force ? "force " : "torque ") + vec_text((*f)[std::size_t(i)]) +
+                         " (pair forces at these positions)" + closest_pairs(x, s.radius, domain));
 
   const auto t0 = std::chrono::steady_clock::now();
-  ev.hydro = hydro_.solve(c, s.fixed, ev.force, ev.torque);
+  try {
+    ev.hydro = hydro_.solve(c, s.fixed, ev.force, ev.torque);
+  } catch (const PhysicsError& e) {
+    throw PhysicsError(at() + ": " + e.what() + closest_pairs(x, s.radius, domain));
+  }
+  for (const auto* v : {&ev.hydro.U, &ev.hydro.Omega})
+    if (const long i = first_non_finite(*v); i >= 0)
+      throw PhysicsError(at() + ": particle " + std::to_string(i) + " has a non-finite " +
+                         (v == &ev.hydro.U ? "velocity " : "angular velocity ") + vec_text((*v)[std::size_t(i)]) +
+                         " from the hydrodynamic solve" + closest_pairs(x, s.radius, domain));
   const double solve_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   phases_.names.clear();
   phases_.seconds.clear();
@@ -92,12 +166,12 @@ std::vector<Vec3> Simulation::brownian_displacement(const State& s, double dt, R
 }
 
 void Simulation::check_finite(const State& s) const {
-  for (std::size_t i = 0; i < s.size(); ++i)
-    if (!s.position[i].allFinite()) {
-      std::ostringstream o;
-      o << "step " << s.step << ": particle " << i << " has a non-finite position";
-      throw PhysicsError(o.str());
-    }
+  if (const long i = first_non_finite(s.position); i >= 0) {
+    std::ostringstream o;
+    o << "step " << s.step << ": particle " << i << " has a non-finite position " << vec_text(s.position[std::size_t(i)])
+      << " after the step from " << s.step - 1;
+    throw PhysicsError(o.str());
+  }
 }
 
 void Simulation::advance(State& s, const Evaluation& ev) {
@@ -151,26 +225,65 @@ long Simulation::run(State& s, OutputSink& out, const RunControl& control) {
     if (!in) throw PhysicsError("checkpoint holds an unknown random-number state: " + s.rng_state.substr(0, 60));
     legacy_noise_ = engine;
   }
+  // The noise state to store with a checkpoint of s.
+  auto store_noise = [&](State& st, const std::optional<std::mt19937_64>& noise) {
+    if (noise) {
+      std::ostringstream o;
+      o << *noise;
+      st.rng_state = o.str();
+    } else {
+      st.rng_state = kNoiseStreams;
+    }
+  };
   const long last = long(scene_.time.last_step());
   progress::Progress progress(long(s.step), last, control.quiet);
   bool frame_done = control.frame_done;
   long taken = 0;
   Frame latest;
   bool have_latest = false;
-  double max_overlaps = 0;
+  long max_overlaps = 0;
+  // The state before the step being taken (and its legacy noise): the checkpoint on a failure.
+  std::optional<State> before;
+  std::optional<std::mt19937_64> noise_before;
+  auto stop = [&](const PhysicsError& e) -> RunStopped {
+    std::ostringstream o;
+    if (!before) {
+      o << e.what() << "\n  this is the first evaluation of the run (step " << s.step
+        << "): there is no earlier good state to keep";
+      return RunStopped(o.str(), s.step, -1);
+    }
+    State good = *before;
+    store_noise(good, noise_before);
+    out.checkpoint(good);
+    o << "the step from " << good.step << " to " << good.step + 1 << " (t = " << good.time << ", dt = " << good.dt
+      << ") failed: " << e.what() << "\n  stopped with the last good state, step " << good.step
+      << ", as the checkpoint";
+    s = std::move(good);
+    return RunStopped(o.str(), s.step, s.step);
+  };
   for (;;) {
     const bool output_step = !frame_done && frame_step(s.step);
-    const Evaluation ev = evaluate(s, s.position, 0.0, output_step);
+    GapSurvey overlaps;
+    Evaluation ev;
+    try {
+      ev = evaluate_checked(s, s.position, 0.0, output_step, &overlaps);
+    } catch (const RunStopped&) {
+      throw;
+    } catch (const PhysicsError& e) {
+      throw stop(e);
+    }
+    // Overlaps below [run] max_overlap: warn, naming the deepest pairs, whenever their count reaches
+    // a new maximum, and continue (the far-field mobility is overlap-regularised and stays positive
+    // definite); beyond it evaluate_checked has stopped the run.
+    if (overlaps.stats.overlaps > max_overlaps) {
+      max_overlaps = overlaps.stats.overlaps;
+      if (!control.quiet)
+        std::fprintf(stderr, "%sstep %ld: %ld overlapping pair(s), deepest %s (continuing: below [run] max_overlap = %g)\n",
+                     isatty(fileno(stderr)) ? "\n" : "", long(s.step), overlaps.stats.overlaps,
+                     describe_pairs(overlaps.worst).c_str(), scene_.run.max_overlap);
+    }
     if (output_step) {
       Frame f = frame(s, ev);
-      // Overlap policy: count every frame (observable "overlaps"), warn when a new maximum is reached,
-      // continue (the far-field mobility is overlap-regularised and stays positive definite).
-      if (f.scalar("overlaps") > max_overlaps) {
-        max_overlaps = f.scalar("overlaps");
-        if (!control.quiet)
-          std::fprintf(stderr, "%sstep %ld: %.0f overlapping pair(s), smallest gap %.3g a (continuing: mobility is overlap-regularised)\n",
-                       isatty(fileno(stderr)) ? "\n" : "", long(s.step), f.scalar("overlaps"), f.scalar("min_gap"));
-      }
       out.record(f);
       latest = std::move(f);
       have_latest = true;
@@ -180,13 +293,7 @@ long Simulation::run(State& s, OutputSink& out, const RunControl& control) {
     const long ce = scene_.output.checkpoint_every;
     const std::int64_t since = s.step - scene_.time.start_step;
     if (at_end || (ce > 0 && since % ce == 0 && since > 0)) {
-      if (legacy_noise_) {
-        std::ostringstream o;
-        o << *legacy_noise_;
-        s.rng_state = o.str();
-      } else {
-        s.rng_state = kNoiseStreams;
-      }
+      store_noise(s, legacy_noise_);
       out.checkpoint(s);
     }
     // Progress of the step reached, with the latest frame's diagnostics; the last step's line is
@@ -195,7 +302,13 @@ long Simulation::run(State& s, OutputSink& out, const RunControl& control) {
     if (taken > 0)
       progress.update(long(s.step), s.time, have_latest, have_latest ? latest.scalar("min_gap") : 0.0,
                       have_latest ? latest.scalar("overlaps") : 0.0);
-    advance(s, ev);
+    before = s;
+    noise_before = legacy_noise_;
+    try {
+      advance(s, ev);
+    } catch (const PhysicsError& e) {
+      throw stop(e);
+    }
     ++taken;
   }
   progress.finish(long(s.step), s.time, have_latest, have_latest ? latest.scalar("min_gap") : 0.0,

@@ -59,6 +59,11 @@ class Simulation final : public Dynamics {
 
   // Steps s to the scene's last step, recording every output step and checkpointing; returns the
   // number of steps taken by this call.
+  // Failure policy (docs/reliability.md): a PhysicsError while taking a step (the evaluation of the
+  // state it reaches included: non-finite positions, forces or velocities, a pair overlapping beyond
+  // [run] max_overlap, a failed factorisation or Krylov solve) stops the run with RunStopped after
+  // checkpointing the state before that step (s is left at it). At the first evaluation of a call
+  // there is no earlier state: RunStopped with checkpoint_step = -1 and nothing written.
   long run(State& s, OutputSink& out, const RunControl& control);
 
   // Phase graph mode (serial: the same phases one after another, for comparisons).
@@ -67,6 +72,10 @@ class Simulation final : public Dynamics {
 
  private:
   void check_finite(const State& s) const;
+  // evaluate(), plus (overlaps != nullptr) the overlapping pairs of x, checked against
+  // [run] max_overlap before the solve; every failure is a PhysicsError naming step and particles.
+  Evaluation evaluate_checked(const State& s, const std::vector<Vec3>& x, double t, bool diagnostics,
+                              GapSurvey* overlaps);
   Scene scene_;
   ResolvedModel model_;
   double strain_rate_;  // d(Lees-Edwards strain)/dt of the box

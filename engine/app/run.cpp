@@ -2,8 +2,10 @@
 
 #include "io/checkpoint.hpp"
 #include "io/h5md.hpp"
+#include "io/scene_toml.hpp"
 #include "io/xyz.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -34,6 +36,55 @@ class RunFiles final : public OutputSink {
   io::RunOutput out_;
   std::optional<io::XyzWriter> xyz_;
 };
+
+// The scene changes a resume accepts: [time] dt and [run] keys (failure policy).
+struct ResumableChanges {
+  std::string stored_scene;  // the checkpoint's scene text
+  std::string changes;       // "[time] dt: 0.1 -> 0.05; ..."
+  bool dt_changed = false;
+};
+std::optional<ResumableChanges> resumable_changes(const std::string& checkpoint, const std::string& scene_toml) {
+  const io::Checkpoint c = io::read_checkpoint(checkpoint);
+  const auto diff = io::scene_differences(c.scene_toml, scene_toml);
+  if (diff.empty()) return std::nullopt;
+  ResumableChanges r;
+  for (const auto& d : diff) {
+    if (d.rfind("[time] dt: ", 0) == 0) r.dt_changed = true;
+    else if (d.rfind("[run] ", 0) != 0) return std::nullopt;  // RunOutput::resume refuses, naming the keys
+  }
+  r.stored_scene = c.scene_toml;
+  r.changes = io::join_differences(diff);
+  return r;
+}
+
+// The message of a run stopped by a physics failure: what failed (from the engine), then what was
+// kept or removed and what to do.
+std::string stopped_message(const RunStopped& e, const Scene& scene, const RunOptions& opt, bool resumed,
+                            std::optional<RunFiles>& files) {
+  std::string m = e.what();
+  const std::string cmd = "stokesian run " + scene.source + " --out " + opt.out + " --resume";
+  if (e.checkpoint_step >= 0) {
+    m += "\n  checkpoint: " + io::checkpoint_path(opt.out) + " (step " + std::to_string(e.checkpoint_step) + "); " +
+         opt.out + " holds the frames up to that step";
+    char half[32];
+    std::snprintf(half, sizeof half, "%g", 0.5 * scene.time.dt);
+    m += "\n  to continue: reduce [time] dt in " + scene.source + " (e.g. to " + half + ") and run `" + cmd +
+         "` (a resume accepts a changed [time] dt and [run] keys)";
+  } else if (!resumed) {
+    // The scene's initial state fails: nothing worth resuming. Remove what the start created.
+    const std::string xyz = xyz_path(scene, opt.out);
+    files.reset();
+    for (const std::string& f : {opt.out, opt.out + ".shadow", io::checkpoint_path(opt.out),
+                                 io::start_marker_path(opt.out), xyz})
+      if (!f.empty()) io::detail::remove_if_exists(f);
+    m += "\n  no step was taken: removed " + opt.out + " and its working files; change the initial state or the "
+         "model in " + scene.source + " and run again";
+  } else {
+    m += "\n  the resumed state (the checkpoint " + io::checkpoint_path(opt.out) +
+         ") itself fails: it is kept unchanged; a smaller [time] dt cannot help here";
+  }
+  return m;
+}
 
 }  // namespace
 
@@ -77,10 +128,25 @@ long run(Simulation& sim, const RunOptions& opt) {
     }
   }
   if (resume) {
+    // A failed run is continued with a smaller [time] dt (docs/reliability.md): the scene may differ
+    // from the checkpoint's in [time] dt and [run] keys only. The files keep the scene the run
+    // started with (io compares against it); the state takes this scene's dt.
+    RunHeader stored_header = header;
+    bool dt_changed = false;
+    if (const auto allowed = resumable_changes(io::checkpoint_path(opt.out), header.scene_toml)) {
+      stored_header.scene_toml = allowed->stored_scene;
+      dt_changed = allowed->dt_changed;
+      std::fprintf(stderr, "stokesian: resuming with changed %s (allowed on resume; %s keeps the scene it was started "
+                   "with, the dt observable records the step used)\n", allowed->changes.c_str(), opt.out.c_str());
+    }
     io::Checkpoint restored;
-    out.emplace(io::RunOutput::resume(opt.out, header, restored));
+    out.emplace(io::RunOutput::resume(opt.out, stored_header, restored));
     s = restored.state;
-    control.frame_done = sim.frame_step(s.step);
+    // Fixed-step integrators step by the scene's dt; rkf45 adapts its own and takes a changed one
+    // as its next trial step.
+    if (dt_changed || sim.model().integrator != "rkf45") s.dt = scene.time.dt;
+    // The frame of the checkpoint's step is recorded unless the run stopped before recording it.
+    control.frame_done = out->trajectory().has_frames() && out->trajectory().last_step() == s.step;
   } else {
     s = sim.initial_state();
     out.emplace(io::RunOutput::start(opt.out, header));
@@ -89,14 +155,57 @@ long run(Simulation& sim, const RunOptions& opt) {
   if (const std::string path = xyz_path(scene, opt.out); !path.empty())
     xyz.emplace(path, s.domain, io::species_labels(s.radius, s.fixed),
                 resume ? std::optional<std::int64_t>(s.step) : std::nullopt);
-  RunFiles files(std::move(*out), std::move(xyz));
-  const long taken = sim.run(s, files, control);
-  if (s.step >= scene.time.last_step()) files.finish();
+  std::optional<RunFiles> files(std::in_place, std::move(*out), std::move(xyz));
+  long taken = 0;
+  try {
+    taken = sim.run(s, *files, control);
+  } catch (const RunStopped& e) {
+    throw RunStopped(stopped_message(e, scene, opt, resume, files), e.failed_step, e.checkpoint_step);
+  }
+  if (s.step >= scene.time.last_step()) files->finish();
   return taken;
+}
+
+std::size_t report_close_pairs(const Scene& scene, const ResolvedModel& model, std::FILE* to) {
+  const auto& x = scene.positions;
+  const auto& a = scene.radii;
+  if (x.size() < 2) return 0;
+  // Pairs whose symmetric gap xi = 2r/(a_i + a_j) - 2 is below the lubrication floor: their gap
+  // h = xi (a_i + a_j)/2 is below min_gap * max(a).
+  const double amax = *std::max_element(a.begin(), a.end());
+  const double floor_xi = scene.hydro.lubrication_min_gap;
+  const bool near_field = model.level == HydroModel::stokesian;
+  const GapSurvey g = survey_gaps(x, a, scene.domain, near_field ? floor_xi * amax : 0.0, x.size() * 8);
+  std::vector<PairGap> overlapping, regularised;
+  for (const PairGap& p : g.worst) {
+    const double xi = 2.0 * p.gap / (a[std::size_t(p.i)] + a[std::size_t(p.j)]);
+    if (p.gap < 0) overlapping.push_back(p);
+    else if (near_field && xi < floor_xi) regularised.push_back(p);
+  }
+  constexpr std::size_t kShown = 10;
+  auto listed = [&](std::vector<PairGap> v) {
+    const std::size_t n = v.size();
+    if (n > kShown) v.resize(kShown);
+    return describe_pairs(v) + (n > kShown ? ", ... (" + std::to_string(n - kShown) + " more)" : "");
+  };
+  if (!overlapping.empty())
+    std::fprintf(to, "stokesian: warning: %zu overlapping pair(s): %s; %s\n", overlapping.size(),
+                 listed(overlapping).c_str(),
+                 near_field ? "their lubrication is evaluated at the lubrication minimum gap (it does not depend on "
+                              "how deep they overlap) and the far field uses the overlap-regularised mobility"
+                            : "the far field uses the overlap-regularised mobility");
+  if (!regularised.empty())
+    std::fprintf(to,
+                 "stokesian: warning: %zu pair(s) closer than [hydrodynamics] lubrication_min_gap = %g (symmetric "
+                 "gap 2r/(a_i+a_j) - 2): %s; their lubrication is evaluated at that gap (regularised), so the result "
+                 "does not change as they come closer\n",
+                 regularised.size(), floor_xi, listed(regularised).c_str());
+  return overlapping.size() + regularised.size();
 }
 
 void solve(Simulation& sim, const std::string& path) {
   const State s = sim.initial_state();
+  report_close_pairs(sim.scene(), sim.model(), stderr);
   const Evaluation ev = sim.evaluate(s, s.position, 0.0, true);
   // A previous start's marker would let a later --resume replace this result: remove it first.
   io::detail::remove_if_exists(io::start_marker_path(path));

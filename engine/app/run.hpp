@@ -6,6 +6,7 @@
 // the trajectory's working copy (.shadow) and keeps the checkpoint (docs/output.md).
 #include "engine/simulation.hpp"
 
+#include <cstdio>
 #include <string>
 
 namespace stokesian::app {
@@ -22,6 +23,10 @@ long run(Simulation& sim, const RunOptions& opt);
 // One solve of the initial configuration written as a single frame (no working copy, no
 // checkpoint).
 void solve(Simulation& sim, const std::string& out);
+// Warns on `to` about the pairs of the scene's initial configuration that overlap or, with a near
+// field, are closer than [hydrodynamics] lubrication_min_gap (their lubrication is regularised:
+// evaluated at that gap), naming them; returns their number. `solve` calls it before solving.
+std::size_t report_close_pairs(const Scene& scene, const ResolvedModel& model, std::FILE* to);
 
 // The run's header with /h5md/author: [output] author, else default_author().
 RunHeader run_header(const Simulation& sim);

@@ -6,19 +6,50 @@
 // lanczos_sqrt: y = A^{1/2} z by the Lanczos approximation of Chow & Saad (2014, SIAM J. Sci.
 //   Comput. 36, A1092, alg. 2.1): y_k = |z| V_k T_k^{1/2} e_1, stopped when successive iterates
 //   differ by less than tol relative.
+//
+// Failure detection (docs/reliability.md, "Failure policies during a run"). Both methods stop
+// early, instead of running to max_iter, and say why (KrylovResult::status):
+//   non_finite  a residual, step length or Lanczos coefficient is NaN or infinite (a non-finite
+//               operator or right-hand side);
+//   indefinite  CG: a search direction with p.Ap <= 0; Lanczos: an eigenvalue of the tridiagonal
+//               T_k below -sqrt(eps) |T_k| (the Ritz values of T_k lie in the spectrum's hull, so
+//               a clearly negative one proves A is not positive definite);
+//   stagnated   CG only: (a) the smallest residual so far has not halved in kStagnationWindow
+//               iterations. For SPD A, CG reduces the error by (sqrt(k)-1)/(sqrt(k)+1) per
+//               iteration (k the condition number), halving it in ~0.35 sqrt(k) iterations, so a
+//               window of 200 is met by any system with k below ~3e5; an operator that is not
+//               symmetric stagnates. (b) The recursively updated residual keeps falling below
+//               round-off while the true residual b - A x stops near eps |A| |x|, so convergence
+//               is accepted only after checking the true residual (one extra product); when it is
+//               above the tolerance CG restarts from it;
+//   round_off   CG only: such a restart did not halve the true residual: the tolerance is below
+//               what double precision reaches for this system;
+//   max_iterations  the cap was reached while still progressing.
+// A Lanczos "happy breakdown" (beta_k = 0: the Krylov space is invariant) is exact convergence.
 #include "engine/core/types.hpp"
 
 #include <functional>
+#include <string>
 
 namespace stokesian {
 
 using LinearOperator = std::function<void(const VecX& in, VecX& out)>;
 
+enum class KrylovStatus { converged, max_iterations, stagnated, round_off, indefinite, non_finite };
+
 struct KrylovResult {
   int iterations = 0;
   double relative_residual = 0.0;  // CG: |b - A x|/|b|; Lanczos: last relative change
   bool converged = false;
+  KrylovStatus status = KrylovStatus::max_iterations;
+  double curvature = 0.0;  // indefinite: CG's p.Ap/|p|^2, or Lanczos' most negative Ritz value
 };
+
+// One phrase for messages: "converged", "stagnated (...)", ...
+std::string describe(const KrylovResult& r);
+
+// CG iterations without halving the smallest residual after which CG is declared stagnated.
+constexpr int kStagnationWindow = 200;
 
 KrylovResult conjugate_gradient(const LinearOperator& A, const VecX& b, VecX& x, double tol, int max_iter);
 

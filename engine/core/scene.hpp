@@ -134,6 +134,13 @@ struct OutputParams {
   std::string author;                  // H5MD /h5md/author name; "" = the login name of the user
 };
 
+// What a run does when its state goes bad (docs/reliability.md, "Failure policies during a run").
+struct RunPolicy {
+  // The run stops (exit 3, resumable checkpoint) when a pair overlaps deeper than this fraction
+  // of its smaller radius: a_i + a_j - r > max_overlap min(a_i, a_j) [1].
+  double max_overlap = 0.5;
+};
+
 struct Scene {
   std::string source;  // path of the scene file (for messages)
   Domain domain;
@@ -147,6 +154,7 @@ struct Scene {
   std::uint64_t seed = 1;  // Brownian random seed
   TimeParams time;
   OutputParams output;
+  RunPolicy run;
   std::string toml;  // the scene as resolved TOML text (stored in outputs)
   // Line of each key in the source, "table.key" -> line (0 = unknown), so that checks made after
   // parsing (model resolution) still name file, line and key.
