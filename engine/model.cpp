@@ -3,6 +3,7 @@
 #include "engine/core/errors.hpp"
 #include "engine/core/flow.hpp"
 #include "engine/methods.hpp"
+#include "engine/pair_forces.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -81,6 +82,25 @@ ModelKey ResolvedModel::key() const {
 ResolvedModel resolve_model(const Scene& s) {
   ResolvedModel m;
   const std::size_t n = s.positions.size();
+  // A pair law in a periodic box reaches at most half the smallest edge (one image per pair, the
+  // minimum-image pair search): gap cut-off + 2 a_max <= L_min / 2.
+  if (s.domain.periodic() && n >= 2) {
+    const double a_max = *std::max_element(s.radii.begin(), s.radii.end());
+    const double half = 0.5 * s.domain.box.minCoeff();
+    for (std::size_t l = 0; l < s.forces.pair.size(); ++l) {
+      const double cut = forces::resolved_cutoff(s.forces.pair[l], a_max);
+      if (cut + 2 * a_max > half) {
+        const std::string table = "forces.pair." + std::to_string(l);
+        const bool given = s.lines.count(table + ".cutoff") > 0;
+        std::ostringstream o;
+        o << "law " << l << " (" << name_of(s.forces.pair[l].kind) << ") reaches centre distance " << cut + 2 * a_max
+          << " a (gap cut-off " << cut << (given ? "" : ", the law's default") << " + 2 a_max = " << 2 * a_max
+          << " a), beyond half the smallest box edge (" << half << " a) (allowed: gap cut-off at most "
+          << std::max(0.0, half - 2 * a_max) << " a in this box; set cutoff, or enlarge [domain] box)";
+        unavailable(s, table, given ? "cutoff" : "kind", o.str());
+      }
+    }
+  }
   const AmbientFlow flow = ambient_flow(s.flow);
   m.brownian = s.fluid.kT > 0.0;
   m.fixed_particles = std::any_of(s.fixed.begin(), s.fixed.end(), [](char c) { return c != 0; });

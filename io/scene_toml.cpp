@@ -137,7 +137,7 @@ class Reader {
       if (auto i = e.value_exact<int64_t>()) v[c] = double(*i);
       else if (auto d = e.value_exact<double>()) v[c] = *d;
       else fail(&e, w, "expected a number, got " + type_name(e));
-      if (!std::isfinite(v[c])) fail(&e, w, "not a finite number");
+      if (!std::isfinite(v[c])) fail(&e, w, "component " + std::to_string(c) + " is not a finite number (allowed: finite numbers)");
     }
     return v;
   }

@@ -434,3 +434,20 @@ TEST_CASE("syntax errors quote the line, strings are bounded, type errors give t
   e = error_of(kTwo + "[time]\ndt = \"x\"\n");
   CHECK(contains(e, "[time] dt: expected a number, got a string (allowed (0, 1e+12])"));
 }
+
+// Fuzz finding: a pair law reaching beyond half a small periodic box (e.g. DLVO's default range in a
+// box of 10 a) passed check's validation and stopped the first force evaluation with exit 4 and
+// "neighbor_pairs: interaction range ... exceeds half the smallest box edge", naming no key; a
+// non-finite box edge did not say what is allowed.
+TEST_CASE("a pair law longer than half the periodic box is a scene error naming the law, key and limit") {
+  const std::string box = "[domain]\nkind = \"periodic\"\nbox = [10, 10, 10]\n[particles]\ngenerate = \"lattice\"\ncount = 8\n";
+  std::string e = error_of(box + "[[forces.pair]]\nkind = \"dlvo\"\n");
+  CHECK(contains(e, "bad.toml:8: [forces.pair.0] kind"));
+  CHECK(contains(e, "the law's default"));
+  CHECK(contains(e, "allowed: gap cut-off at most 3 a in this box"));
+  e = error_of(box + "[[forces.pair]]\nkind = \"hertz\"\n[[forces.pair]]\nkind = \"morse\"\ncutoff = 3.5\n");
+  CHECK(contains(e, "bad.toml:11: [forces.pair.1] cutoff"));
+  CHECK(error_of(box + "[[forces.pair]]\nkind = \"morse\"\ncutoff = 3.0\n") == "");
+  e = error_of("[domain]\nkind = \"periodic\"\nbox = [nan, 10, 10]\n" + kTwo);
+  CHECK(contains(e, "bad.toml:3: [domain] box: component 0 is not a finite number (allowed: finite numbers)"));
+}
