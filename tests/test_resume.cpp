@@ -9,10 +9,8 @@
 
 #include <hdf5.h>
 
+#include "support/child_process.hpp"
 #include "support/hdf5_read.hpp"
-#include <fcntl.h>
-#include <signal.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -21,7 +19,6 @@
 #include <random>
 #include <sstream>
 #include <string>
-#include <thread>
 #include <vector>
 
 namespace fs = std::filesystem;
@@ -35,35 +32,11 @@ namespace {
 // `err` set, the child's stderr goes to that file; `command` replaces "run" (e.g. "solve").
 int run_cli(const std::string& scene, const std::string& out, bool resume, int kill_ms, const std::string& err = "",
             const std::string& kill_when = "", const std::string& command = "run") {
-  const pid_t pid = fork();
-  if (pid == 0) {
-    std::vector<std::string> args{STOKESIAN_BINARY, command, scene, "--out", out, "--quiet", "--threads", "1"};
-    if (resume) args.push_back("--resume");
-    std::vector<char*> argv;
-    for (auto& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    if (!err.empty()) {
-      const int fd = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-      if (fd < 0 || dup2(fd, 2) < 0) _exit(126);
-    }
-    execv(argv[0], argv.data());
-    _exit(127);
-  }
-  if (!kill_when.empty()) {
-    int status = 0;
-    while (!fs::exists(kill_when))
-      if (waitpid(pid, &status, WNOHANG) == pid) return WIFSIGNALED(status) ? -1 : WEXITSTATUS(status);
-    kill(pid, SIGKILL);
-  } else if (kill_ms >= 0) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(kill_ms));
-    kill(pid, SIGKILL);
-  }
-  int status = 0;
-  waitpid(pid, &status, 0);
-  if (WIFSIGNALED(status)) return -1;
-  return WEXITSTATUS(status);
+  std::vector<std::string> args{STOKESIAN_BINARY, command, scene, "--out", out, "--quiet", "--threads", "1"};
+  if (resume) args.push_back("--resume");
+  const stokesian::test::ChildOutcome c = stokesian::test::run_child(args, kill_ms, kill_when, err, -1, false);
+  return c.killed ? -1 : c.status;
 }
-
 
 void check_kill_resume(const std::string& scene_text, const std::vector<std::string>& datasets, std::uint64_t seed) {
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
