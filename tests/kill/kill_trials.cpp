@@ -2,7 +2,10 @@
 // --resume until it completes, and compares the result with an uninterrupted run.
 //
 //   kill_trials --scene FILE --stokesian PATH --work DIR [--trials 20] [--seed 1] [--threads 1]
-//               [--report out.json] [--keep]
+//               [--first-trial 0] [--report out.json] [--keep]
+//
+// Trial t's kill moments depend only on (seed, t): --first-trial K --trials N runs trials K..K+N-1,
+// so a long form can be split over several processes (each makes its own uninterrupted run).
 //
 // Once: `stokesian run FILE --out DIR/ref/k.h5` uninterrupted (timed: T). Then per trial t, in
 // DIR/trial_t: a fresh `run` and then `run --resume` processes, each killed at a seeded moment,
@@ -45,7 +48,7 @@ namespace {
 
 struct Options {
   std::string scene, stokesian, work, report;
-  int trials = 20, threads = 1;
+  int trials = 20, threads = 1, first_trial = 0;
   std::uint64_t seed = 1;
   bool keep = false;
 };
@@ -53,7 +56,7 @@ struct Options {
 [[noreturn]] void usage(const std::string& why) {
   std::fprintf(stderr,
                "kill_trials: %s\nusage: kill_trials --scene FILE --stokesian PATH --work DIR [--trials N] [--seed S] "
-               "[--threads T] [--report out.json] [--keep]\n",
+               "[--threads T] [--first-trial K] [--report out.json] [--keep]\n",
                why.c_str());
   std::exit(2);
 }
@@ -80,6 +83,7 @@ Options parse(int argc, char** argv) {
     else if (a == "--report") o.report = value();
     else if (a == "--trials") o.trials = int(number(1, 10000));
     else if (a == "--threads") o.threads = int(number(1, 256));
+    else if (a == "--first-trial") o.first_trial = int(number(0, 1000000));
     else if (a == "--seed") o.seed = std::uint64_t(number(0, 2147483647));
     else if (a == "--keep") o.keep = true;
     else usage("unknown option " + a);
@@ -349,7 +353,7 @@ int main(int argc, char** argv) {
 
   std::vector<Trial> trials;
   int identical = 0, kills_total = 0, kills_before_ckpt = 0, kills_in_resume = 0;
-  for (int t = 0; t < opt.trials; ++t) {
+  for (int t = opt.first_trial; t < opt.first_trial + opt.trials; ++t) {
     Trial tr;
     tr.index = t;
     std::seed_seq seq{std::uint32_t(opt.seed), std::uint32_t(opt.seed >> 32), std::uint32_t(t)};
@@ -443,7 +447,8 @@ int main(int argc, char** argv) {
 
   if (!opt.report.empty()) {
     std::ofstream r(opt.report);
-    r << "{\n  \"scene\": \"" << json_escape(opt.scene) << "\",\n  \"seed\": " << opt.seed << ",\n  \"threads\": "
+    r << "{\n  \"scene\": \"" << json_escape(opt.scene) << "\",\n  \"seed\": " << opt.seed
+      << ",\n  \"first_trial\": " << opt.first_trial << ",\n  \"threads\": "
       << opt.threads << ",\n  \"uninterrupted_ms\": " << T << ",\n  \"trials\": " << opt.trials
       << ",\n  \"identical\": " << identical << ",\n  \"kills\": " << kills_total
       << ",\n  \"kills_before_first_checkpoint\": " << kills_before_ckpt << ",\n  \"kills_of_resumes\": "
