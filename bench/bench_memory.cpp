@@ -4,7 +4,7 @@
 // steps, and a checkpoint every 1000 steps) into a temporary file. A leak of a few bytes per step
 // or per frame shows as a slope; the result records every sample, the first and last RSS and the
 // least-squares slope over the second half (after the allocator and HDF5 caches have settled).
-// Usage: bench_memory [--quick] [--out DIR] [--steps N] [--no-output].
+// Usage: bench_memory [--quick] [--out DIR] [--steps N] [--no-output] [--hdf5-gc].
 //
 // Scene: 27 Brownian spheres (kT = 1) on a 3 x 3 x 3 lattice in a periodic box of edge 9 a, free
 // draining (the cheapest level that still runs the whole loop), Morse attraction and Hertz contact
@@ -15,6 +15,7 @@
 #include "io/checkpoint.hpp"
 #include "io/scene_toml.hpp"
 
+#include <hdf5.h>
 #include <malloc.h>
 #include <unistd.h>
 
@@ -64,33 +65,40 @@ std::string scene_text(long steps) {
   return t.str();
 }
 
-// Forwards to the run's files and samples the RSS after every checkpoint.
+// Forwards to the run's files and samples the RSS after every checkpoint. The samples go into
+// vectors reserved up front (the result rows are made after the run), so that the measurement
+// itself allocates nothing while the run goes on.
 class SamplingSink final : public OutputSink {
  public:
-  SamplingSink(std::optional<io::RunOutput> out, bench::Results& res, std::chrono::steady_clock::time_point t0)
-      : out_(std::move(out)), res_(res), t0_(t0) {}
+  SamplingSink(std::optional<io::RunOutput> out, std::size_t samples, std::chrono::steady_clock::time_point t0)
+      : out_(std::move(out)), t0_(t0) {
+    steps.reserve(samples);
+    rss_samples.reserve(samples);
+    heap_samples.reserve(samples);
+    elapsed.reserve(samples);
+  }
   void record(const Frame& f) override {
     if (out_) out_->record(f);
   }
   void checkpoint(const State& s) override {
     if (out_) out_->checkpoint(s);
     else if (s.step % 1000 != 0) return;
+    if (gc) H5garbage_collect();
     const double rss = rss_bytes();
     const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
-    const double heap = heap_in_use();
-    res_.add({{"step", double(s.step)}}, {{"rss_bytes", rss}, {"heap_in_use_bytes", heap}, {"elapsed", t}});
-    heap_samples.push_back(heap);
+    heap_samples.push_back(heap_in_use());
+    elapsed.push_back(t);
     steps.push_back(double(s.step));
     rss_samples.push_back(rss);
   }
   void finish() {
     if (out_) out_->trajectory().finish();
   }
-  std::vector<double> steps, rss_samples, heap_samples;
+  std::vector<double> steps, rss_samples, heap_samples, elapsed;
+  bool gc = false;
 
  private:
   std::optional<io::RunOutput> out_;
-  bench::Results& res_;
   std::chrono::steady_clock::time_point t0_;
 };
 
@@ -99,18 +107,21 @@ class SamplingSink final : public OutputSink {
 int main(int argc, char** argv) {
   // --steps N (this driver only): another run length, e.g. 10^6 to see whether a slope saturates.
   // --no-output (this driver only): frames and checkpoints discarded, RSS still sampled every 1000
-  // steps: the engine alone, to tell its memory from the output's.
+  // steps: the engine alone, to tell its memory from the output's. --hdf5-gc: empty the HDF5
+  // library's free lists (H5garbage_collect) after every checkpoint, to tell them from a leak.
   long steps_opt = 0;
   bool no_output = false;
+  bool hdf5_gc = false;
   std::vector<char*> args;
   for (int i = 0; i < argc; ++i) {
     if (std::string(argv[i]) == "--steps" && i + 1 < argc) steps_opt = std::atol(argv[++i]);
     else if (std::string(argv[i]) == "--no-output") no_output = true;
+    else if (std::string(argv[i]) == "--hdf5-gc") hdf5_gc = true;
     else args.push_back(argv[i]);
   }
   const bench::Options opt = bench::parse_options(int(args.size()), args.data());
   const long steps = steps_opt > 0 ? steps_opt : opt.quick ? 10000 : 100000;
-  bench::Results res(std::string(no_output ? "memory_no_output" : "memory") +
+  bench::Results res(std::string(no_output ? "memory_no_output" : hdf5_gc ? "memory_hdf5_gc" : "memory") +
                      (steps_opt > 0 ? "_" + std::to_string(steps) : opt.quick ? "_quick" : ""));
   const fs::path dir = fs::temp_directory_path() / ("stokesian_bench_memory_" + std::to_string(::getpid()));
   fs::create_directories(dir);
@@ -122,13 +133,18 @@ int main(int argc, char** argv) {
   const auto t0 = std::chrono::steady_clock::now();
   std::optional<io::RunOutput> out;
   if (!no_output) out.emplace(io::RunOutput::start(path, app::run_header(sim)));
-  SamplingSink sink(std::move(out), res, t0);
-  res.add({{"step", -1.0}}, {{"rss_bytes", rss_before}, {"heap_in_use_bytes", heap_in_use()}, {"elapsed", 0.0}});  // before the simulation
+  SamplingSink sink(std::move(out), std::size_t(steps / 1000 + 2), t0);
+  sink.gc = hdf5_gc;
+  // Before the simulation is built.
+  res.add({{"step", -1.0}}, {{"rss_bytes", rss_before}, {"heap_in_use_bytes", heap_in_use()}, {"elapsed", 0.0}});
   RunControl control;
   control.quiet = true;
   sim.run(s, sink, control);
   sink.finish();
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  for (std::size_t k = 0; k < sink.steps.size(); ++k)
+    res.add({{"step", sink.steps[k]}},
+            {{"rss_bytes", sink.rss_samples[k]}, {"heap_in_use_bytes", sink.heap_samples[k]}, {"elapsed", sink.elapsed[k]}});
 
   // Least-squares slope of RSS over the second half of the samples [bytes per step].
   const std::size_t m = sink.steps.size(), h = m / 2;
