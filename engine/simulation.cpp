@@ -109,7 +109,9 @@ Evaluation Simulation::evaluate_checked(const State& s, const std::vector<Vec3>&
   // Overlap policy ([run] max_overlap): a pair deeper than the threshold stops the run before the
   // solve, and explains a set-up failure (factorisation) that the overlap caused.
   const double max_overlap = scene_.run.max_overlap;
-  auto too_deep = [&] { return overlaps && !overlaps->worst.empty() && overlaps->worst[0].depth > max_overlap; };
+  auto too_deep = [&] {
+    return overlaps && overlap_policy_applies() && !overlaps->worst.empty() && overlaps->worst[0].depth > max_overlap;
+  };
   auto overlap_report = [&] {
     std::vector<PairGap> deep;
     for (const PairGap& p : overlaps->worst)
@@ -277,10 +279,15 @@ long Simulation::run(State& s, OutputSink& out, const RunControl& control) {
     // definite); beyond it evaluate_checked has stopped the run.
     if (overlaps.stats.overlaps > max_overlaps) {
       max_overlaps = overlaps.stats.overlaps;
+      char why[160];
+      if (overlap_policy_applies())
+        std::snprintf(why, sizeof why, "below [run] max_overlap = %g", scene_.run.max_overlap);
+      else
+        std::snprintf(why, sizeof why, "without pair forces or lubrication the spheres are penetrable; [run] max_overlap does not apply");
       if (!control.quiet)
-        std::fprintf(stderr, "%sstep %ld: %ld overlapping pair(s), deepest %s (continuing: below [run] max_overlap = %g)\n",
+        std::fprintf(stderr, "%sstep %ld: %ld overlapping pair(s), deepest %s (continuing: %s)\n",
                      isatty(fileno(stderr)) ? "\n" : "", long(s.step), overlaps.stats.overlaps,
-                     describe_pairs(overlaps.worst).c_str(), scene_.run.max_overlap);
+                     describe_pairs(overlaps.worst).c_str(), why);
     }
     if (output_step) {
       Frame f = frame(s, ev);

@@ -72,6 +72,12 @@ class Simulation final : public Dynamics {
 
  private:
   void check_finite(const State& s) const;
+  // [run] max_overlap applies when something in the model keeps surfaces apart: a pair force, or
+  // lubrication (Stokesian dynamics). Free-draining or far-field spheres without pair forces are
+  // penetrable in the model: their overlaps are counted and reported, never a failure.
+  bool overlap_policy_applies() const {
+    return !scene_.forces.pair.empty() || model_.level == HydroModel::stokesian;
+  }
   // evaluate(), plus (overlaps != nullptr) the overlapping pairs of x, checked against
   // [run] max_overlap before the solve; every failure is a PhysicsError naming step and particles.
   Evaluation evaluate_checked(const State& s, const std::vector<Vec3>& x, double t, bool diagnostics,

@@ -423,6 +423,25 @@ TEST_CASE("CLI: an overlap beyond [run] max_overlap stops the run at the step be
   CHECK(gap.back() == doctest::Approx(-std::pow(0.2, 2.0 / 3.0)).epsilon(1e-4));
 }
 
+TEST_CASE("CLI: spheres with neither pair forces nor lubrication are penetrable: overlaps are named, never a failure") {
+  // Opposite forces drive two free-draining spheres through each other (no pair force).
+  write_scene("through.toml", R"([particles]
+positions = [[0, 0, 0], [3, 0, 0]]
+[forces]
+external_force = [[60, 0, 0], [-60, 0, 0]]
+[hydrodynamics]
+model = "free_draining"
+[time]
+dt = 0.1
+steps = 6
+)");
+  const Result r = cli("run through.toml --out through.h5 --progress-interval 1000");
+  CHECK(r.status == 0);
+  // Gap 1 - 0.637 k a at step k: the pair overlaps from step 2 on and passes through by step 6.
+  CHECK(contains(r.err, "step 2: 1 overlapping pair(s), deepest (0, 1) gap -0.273 a (overlap 0.273 of the smaller radius) "
+                        "(continuing: without pair forces or lubrication the spheres are penetrable"));
+}
+
 TEST_CASE("CLI: a non-finite force stops the run with a checkpoint of the step before; a smaller dt continues") {
   // Morse with kappa = 1e4: at an overlap of 0.06 a, exp(2 kappa |h|) overflows. Forces of 50 kT/a
   // close the gap of 1 a by 0.265 a per step of 0.05: step 4 reaches h = -0.06.
@@ -453,6 +472,8 @@ TEST_CASE("CLI: a non-finite force stops the run with a checkpoint of the step b
 TEST_CASE("CLI: a failure at the first evaluation removes every file the run created") {
   write_scene("first.toml", R"([particles]
 positions = [[0, 0, 0], [1.8, 0, 0], [8, 0, 0]]
+[[forces.pair]]
+kind = "hertz"
 [run]
 max_overlap = 0.1
 [time]
