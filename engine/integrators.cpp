@@ -34,13 +34,20 @@ RkfStep rkf45_step(const VelocityField& U, const std::vector<Vec3>& x0, const st
     const auto k6 = stage(0.5, {{-8.0 / 27, &k1}, {2.0, &k2}, {-3544.0 / 2565, &k3}, {1859.0 / 4104, &k4}, {-11.0 / 40, &k5}});
     std::vector<Vec3> x4(n);
     double err = 0;
+    std::size_t worst = 0;  // particle with the largest error estimate (named in failures)
     for (std::size_t i = 0; i < n; ++i) {
       x4[i] = x0[i] + dt * (25.0 / 216 * k1[i] + 1408.0 / 2565 * k3[i] + 2197.0 / 4104 * k4[i] - 0.2 * k5[i]);
       const Vec3 x5 = x0[i] + dt * (16.0 / 135 * k1[i] + 6656.0 / 12825 * k3[i] + 28561.0 / 56430 * k4[i] -
                                     9.0 / 50 * k5[i] + 2.0 / 55 * k6[i]);
-      err = std::max(err, (x5 - x4[i]).norm());
+      const double e = (x5 - x4[i]).norm();
+      if (!std::isfinite(e))
+        throw PhysicsError("rkf45: non-finite error estimate at particle " + std::to_string(i) +
+                           " (non-finite stage positions or velocities)");
+      if (e > err) {
+        err = e;
+        worst = i;
+      }
     }
-    if (!std::isfinite(err)) throw PhysicsError("rkf45: non-finite error estimate (NaN positions or velocities)");
     const double fac = err > 0 ? std::clamp(0.9 * std::pow(tol / err, 0.2), 0.2, 5.0) : 5.0;
     if (err <= tol) {
       out.x = std::move(x4);
@@ -53,7 +60,8 @@ RkfStep rkf45_step(const VelocityField& U, const std::vector<Vec3>& x0, const st
     dt *= fac;
     if (dt < dt_min) {
       std::ostringstream o;
-      o << "rkf45: step size fell below " << dt_min << " (local error " << err << " > tolerance " << tol << ")";
+      o << "rkf45: step size fell below " << dt_min << " (local error " << err << " a at particle " << worst
+        << " > tolerance " << tol << ")";
       throw PhysicsError(o.str());
     }
   }

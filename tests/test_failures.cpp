@@ -7,6 +7,7 @@
 #include "engine/app/run.hpp"
 #include "engine/core/errors.hpp"
 #include "engine/core/krylov.hpp"
+#include "engine/integrators.hpp"
 #include "engine/kernels/far_field.hpp"
 #include "engine/mobility_solver.hpp"
 #include "engine/observers.hpp"
@@ -331,6 +332,30 @@ steps = 2
     } catch (const PhysicsError& e) {
       CHECK(contains(e.what(), "step 7: particle 2 has a non-finite force"));
     }
+  }
+}
+
+TEST_CASE("rkf45: a step size below its minimum and a non-finite error estimate name the particle") {
+  // Particle 1 relaxes with rate 1e6 (stiff): with dt_min = 1e-3 no step meets the tolerance.
+  const VelocityField stiff = [](const std::vector<Vec3>& x, double) {
+    return std::vector<Vec3>{Vec3::Zero(), -1e6 * x[1], Vec3::Zero()};
+  };
+  const std::vector<Vec3> x0{{0, 0, 0}, {1, 0, 0}, {0, 5, 0}};
+  try {
+    (void)rkf45_step(stiff, x0, stiff(x0, 0.0), 0.1, 1e-9, 1e-3);
+    FAIL("no error");
+  } catch (const PhysicsError& e) {
+    CHECK(contains(e.what(), "step size fell below 0.001"));
+    CHECK(contains(e.what(), "at particle 1"));
+  }
+  const VelocityField nan = [](const std::vector<Vec3>& x, double) {
+    return std::vector<Vec3>{Vec3::Zero(), Vec3::Zero(), x[2] * std::numeric_limits<double>::quiet_NaN()};
+  };
+  try {
+    (void)rkf45_step(nan, x0, std::vector<Vec3>(3, Vec3::Zero()), 0.1, 1e-9, 1e-3);
+    FAIL("no error");
+  } catch (const PhysicsError& e) {
+    CHECK(contains(e.what(), "non-finite error estimate at particle 2"));
   }
 }
 
