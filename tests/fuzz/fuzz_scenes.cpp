@@ -872,11 +872,11 @@ herr_t visit_dataset(hid_t obj, const char* name, const H5O_info_t* info, void* 
     const hssize_t n = H5Sget_simple_extent_npoints(space);
     if (n > 0 && n < (hssize_t(1) << 27)) {
       std::vector<double> v(static_cast<std::size_t>(n));
+      // docs/output.md: min_gap is +inf for a single particle (no pair); anything else non-finite
+      // is a defect.
+      const std::string path = name;
+      const bool inf_ok = path.size() >= 13 && path.compare(path.size() - 13, 13, "min_gap/value") == 0;
       if (H5Dread(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()) >= 0)
-        // docs/output.md: min_gap is +inf for a single particle (no pair); anything else non-finite
-        // is a defect.
-        const std::string path = name;
-        const bool inf_ok = path.size() >= 13 && path.compare(path.size() - 13, 13, "min_gap/value") == 0;
         for (std::size_t i = 0; i < v.size(); ++i)
           if (!std::isfinite(v[i]) && !(inf_ok && v[i] > 0 && std::isinf(v[i]))) {
             std::ostringstream o;
