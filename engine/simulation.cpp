@@ -248,6 +248,7 @@ long Simulation::run(State& s, OutputSink& out, const RunControl& control) {
   std::optional<State> before;
   std::optional<std::mt19937_64> noise_before;
   auto stop = [&](const PhysicsError& e) -> RunStopped {
+    if (!control.quiet && isatty(fileno(stderr))) std::fputc('\n', stderr);  // end the progress line
     std::ostringstream o;
     if (!before) {
       o << e.what() << "\n  this is the first evaluation of the run (step " << s.step

@@ -104,19 +104,20 @@ void NearField::factorize(const SparseMatrix& R, CholmodFactor& factor, const st
   } catch (const NotPositiveDefinite& e) {
     const long d = dof_per_particle(m_), p = e.column / d;
     long q = -1;
-    double best = 1e300;
+    double best = 1e300, gap = 0.0;
     for (long j = 0; j < long(x.size()); ++j) {
       if (j == p) continue;
-      const double xi = 2.0 * domain.minimum_image(x[std::size_t(p)] - x[std::size_t(j)]).norm() /
-                            (a[std::size_t(p)] + a[std::size_t(j)]) - 2.0;
+      const double r = domain.minimum_image(x[std::size_t(p)] - x[std::size_t(j)]).norm();
+      const double xi = 2.0 * r / (a[std::size_t(p)] + a[std::size_t(j)]) - 2.0;
       if (xi < best) {
         best = xi;
+        gap = r - a[std::size_t(p)] - a[std::size_t(j)];
         q = j;
       }
     }
     std::ostringstream o;
-    o << e.what() << " (particle " << p;
-    if (q >= 0) o << "; closest pair (" << p << ", " << q << ") at symmetric gap " << best;
+    o << "near-field resistance: " << e.what() << " (particle " << p;
+    if (q >= 0) o << "; closest pair (" << p << ", " << q << ") at surface gap " << gap << " a, symmetric gap " << best;
     o << ")";
     throw PhysicsError(o.str());
   }
