@@ -429,6 +429,18 @@ TEST_CASE("CLI: an overlap beyond [run] max_overlap stops the run at the step be
   CHECK(other.status == 4);
   CHECK(contains(other.err, "[brownian] seed"));
 
+  // A stricter [run] max_overlap (a change a resume accepts) that the checkpointed state itself
+  // violates: the resumed run fails at its first evaluation and keeps its files unchanged.
+  write_scene("squeeze.toml", squeezed(0.02) + "[run]\nmax_overlap = 0.05\n");
+  const Result strict = cli("run squeeze.toml --out sq.h5 --resume --quiet");
+  MESSAGE(strict.err);
+  CHECK(strict.status == 3);
+  CHECK(contains(strict.err, "resuming with changed [run] max_overlap: 0.5 -> 0.05; [time] dt"));
+  CHECK(contains(strict.err, "step 4: 1 overlapping pair(s), the deepest beyond [run] max_overlap = 0.05"));
+  CHECK(contains(strict.err, "the resumed state (the checkpoint sq.h5.ckpt) itself fails: it is kept unchanged"));
+  CHECK(io::read_checkpoint((scratch() / "sq.h5.ckpt").string()).state.step == 4);
+  CHECK(steps_of("sq.h5") == std::vector<double>{0, 2, 4});
+
   // A smaller dt continues from step 4 to the end; the warning names the overlapping pair.
   write_scene("squeeze.toml", squeezed(0.02));
   const Result ok = cli("run squeeze.toml --out sq.h5 --resume --progress-interval 1000");

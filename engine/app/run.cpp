@@ -43,17 +43,27 @@ struct ResumableChanges {
   std::string changes;       // "[time] dt: 0.1 -> 0.05; ..."
   bool dt_changed = false;
 };
-std::optional<ResumableChanges> resumable_changes(const std::string& checkpoint, const std::string& scene_toml) {
+std::optional<ResumableChanges> resumable_changes(const std::string& checkpoint, const Scene& scene,
+                                                  const std::string& scene_toml) {
   const io::Checkpoint c = io::read_checkpoint(checkpoint);
   const auto diff = io::scene_differences(c.scene_toml, scene_toml);
   if (diff.empty()) return std::nullopt;
+  for (const auto& d : diff)
+    if (d.rfind("[time] dt: ", 0) != 0 && d.rfind("[run] ", 0) != 0)
+      return std::nullopt;  // RunOutput::resume refuses, naming every changed key
+  // The changed values as written (%g), not at full precision.
+  const Scene stored = io::parse_scene(c.scene_toml, "stored scene");
   ResumableChanges r;
-  for (const auto& d : diff) {
-    if (d.rfind("[time] dt: ", 0) == 0) r.dt_changed = true;
-    else if (d.rfind("[run] ", 0) != 0) return std::nullopt;  // RunOutput::resume refuses, naming the keys
-  }
   r.stored_scene = c.scene_toml;
-  r.changes = io::join_differences(diff);
+  char buf[96];
+  auto change = [&](const char* key, double from, double to) {
+    if (from == to) return;
+    std::snprintf(buf, sizeof buf, "%s%s: %g -> %g", r.changes.empty() ? "" : "; ", key, from, to);
+    r.changes += buf;
+  };
+  change("[run] max_overlap", stored.run.max_overlap, scene.run.max_overlap);
+  change("[time] dt", stored.time.dt, scene.time.dt);
+  r.dt_changed = stored.time.dt != scene.time.dt;
   return r;
 }
 
@@ -133,7 +143,7 @@ long run(Simulation& sim, const RunOptions& opt) {
     // started with (io compares against it); the state takes this scene's dt.
     RunHeader stored_header = header;
     bool dt_changed = false;
-    if (const auto allowed = resumable_changes(io::checkpoint_path(opt.out), header.scene_toml)) {
+    if (const auto allowed = resumable_changes(io::checkpoint_path(opt.out), scene, header.scene_toml)) {
       stored_header.scene_toml = allowed->stored_scene;
       dt_changed = allowed->dt_changed;
       std::fprintf(stderr, "stokesian: resuming with changed %s (allowed on resume; %s keeps the scene it was started "
@@ -193,7 +203,8 @@ std::size_t report_close_pairs(const Scene& scene, const ResolvedModel& model, s
                  listed(overlapping).c_str(),
                  near_field ? "their lubrication is evaluated at the lubrication minimum gap (it does not depend on "
                               "how deep they overlap) and the far field uses the overlap-regularised mobility"
-                            : "the far field uses the overlap-regularised mobility");
+                 : model.level == HydroModel::far_field ? "the far field uses the overlap-regularised mobility"
+                                                        : "free-draining spheres do not interact hydrodynamically");
   if (!regularised.empty())
     std::fprintf(to,
                  "stokesian: warning: %zu pair(s) closer than [hydrodynamics] lubrication_min_gap = %g (symmetric "
