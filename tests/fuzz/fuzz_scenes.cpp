@@ -846,6 +846,9 @@ pid_t launch(const Options& o, const Case& c, Run& r, const fs::path& scene) {
     setrlimit(RLIMIT_CORE, &core);
     if (!freopen(out.c_str(), "w", stdout) || !freopen(err.c_str(), "w", stderr)) _exit(121);
     setenv("OMP_NUM_THREADS", "1", 1);
+    // The memory limit imposed here, told to the engine the documented way (docs/cli.md), so that
+    // its estimates refuse what this limit cannot hold instead of running into std::bad_alloc.
+    setenv("STOKESIAN_MEMORY_LIMIT", "3G", 1);
     setpgid(0, 0);
     std::vector<char*> argv;
     for (auto& a : args) argv.push_back(a.data());
