@@ -356,6 +356,11 @@ void read_particles(const Reader& R, const toml::table& t, Scene& s, const std::
         R.fail(phi_node, phi_where, o.str());
       }
     }
+    // A placement that takes long is announced with its estimate, so that a slow start is never
+    // mistaken for a hang (docs/reliability.md).
+    if (const double est = placement_seconds_estimate(p); est > kAnnounceSeconds)
+      std::fprintf(stderr, "stokesian: note: %s: placing %ld particles (generate = \"%s\") is estimated at about %.0f s\n",
+                   s.source.c_str(), p.count, p.pattern == PlacementParams::Pattern::lattice ? "lattice" : "random", est);
     try {
       const Placement pl = place_particles(p, s.domain.periodic() ? s.domain.box : Vec3::Zero());
       s.positions = pl.position;

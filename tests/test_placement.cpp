@@ -280,9 +280,9 @@ TEST_CASE("impossible or unsuitable requests fail with a clear message") {
   // Through the scene: the file, the key and the reason.
   const std::string e = error_of("[particles]\ngenerate = \"random\"\ncount = 100\nvolume_fraction = 0.45\n"
                                  "equilibration_sweeps = 0\n");
-  CHECK(contains(e, "bad.toml:2"));
-  CHECK(contains(e, "[particles] generate"));
-  CHECK(contains(e, "equilibration_sweeps"));
+  CHECK(contains(e, "bad.toml:4"));
+  CHECK(contains(e, "[particles] volume_fraction"));
+  CHECK(contains(e, "0.35 with equilibration_sweeps = 0"));
   CHECK(contains(error_of("[particles]\npositions = [[0, 0, 0]]\nmin_gap = 0.1\n"), "only meaningful with generate"));
   CHECK(contains(error_of("[particles]\ngenerate = \"lattice\"\ncount = 8\nequilibration_sweeps = 3\n"),
                  "only meaningful with generate = \"random\""));

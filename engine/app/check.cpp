@@ -369,8 +369,8 @@ int check(Simulation& sim, const CheckOptions& opt, std::FILE* out) {
   }
 
   // Resources (the CLI has refused the scene already when the peak exceeds the available memory).
+  const ResourceEstimate est = estimate_resources(s, model);
   {
-    const ResourceEstimate est = estimate_resources(s, model);
     const MemoryBudget budget = memory_budget();
     std::fprintf(out, "resources (estimate; docs/reliability.md):\n%s\n", est.describe("  ").c_str());
     if (budget.known())
@@ -388,6 +388,10 @@ int check(Simulation& sim, const CheckOptions& opt, std::FILE* out) {
     std::fprintf(out, "  not measured: the initial state has overlapping pairs\n");
   } else if (!opt.estimate) {
     std::fprintf(out, "  not measured (--no-estimate)\n");
+  } else if (est.seconds_per_step > kAnnounceSeconds) {
+    // check stays quick: a step estimated above kAnnounceSeconds is not measured (solve measures it).
+    std::fprintf(out, "  not measured: one step is estimated at about %.3g s (above %.0f s); `stokesian solve` times one evaluation\n",
+                 est.seconds_per_step, kAnnounceSeconds);
   } else {
     const State s0 = sim.initial_state();
     auto t0 = std::chrono::steady_clock::now();

@@ -297,6 +297,13 @@ int main_cli(int argc, char** argv) {
     activity.doing = "resolving the model";
     activity.estimate = estimate_resources(loaded, resolve_model(loaded));
     require_resources(loaded, *activity.estimate, memory_budget(), quiet && !check->parsed() ? nullptr : stderr);
+    // A slow evaluation is announced with its estimate before it starts (never mistaken for a hang);
+    // check does not measure one (check.cpp).
+    if (const double per_step = activity.estimate->seconds_per_step;
+        !check->parsed() && !quiet && per_step > kAnnounceSeconds)
+      std::fprintf(stderr, "stokesian: note: %s: one evaluation is estimated at about %.3g s on one thread%s\n",
+                   loaded.source.c_str(), per_step,
+                   solve->parsed() ? "" : (" (" + std::to_string(loaded.time.steps) + " steps)").c_str());
     activity.doing = "building the simulation";
     Simulation sim(std::move(loaded));
     activity.doing = check->parsed() ? "checking the scene" : solve->parsed() ? "solving" : "running";

@@ -19,6 +19,11 @@ namespace stokesian {
 // 0.85 KB per particle through loading, checking and one evaluation at N = 10^6; rounded up).
 inline constexpr double kBytesPerParticle = 1024.0;
 
+// Work estimated to take longer than this (placement, one evaluation) is announced on stderr with
+// its estimate before it starts ("stokesian: note: ... is estimated at about X s"), and `check`
+// does not measure a step estimated to take longer (docs/reliability.md).
+inline constexpr double kAnnounceSeconds = 10.0;
+
 struct MemoryBudget {
   double bytes = 0.0;   // usable bytes; 0 when unknown (no /proc/meminfo and no limit)
   std::string source;   // "MemAvailable", "STOKESIAN_MEMORY_LIMIT" or "unknown"
