@@ -297,10 +297,9 @@ int main_cli(int argc, char** argv) {
     activity.doing = "resolving the model";
     activity.estimate = estimate_resources(loaded, resolve_model(loaded));
     require_resources(loaded, *activity.estimate, memory_budget(), quiet && !check->parsed() ? nullptr : stderr);
-    // A slow evaluation is announced with its estimate before it starts (never mistaken for a hang);
-    // check does not measure one (check.cpp).
-    if (const double per_step = activity.estimate->seconds_per_step;
-        !check->parsed() && !quiet && per_step > kAnnounceSeconds)
+    // A slow evaluation is announced with its estimate before it starts, even with --quiet (a long
+    // silence must never look like a hang); check does not measure one (check.cpp).
+    if (const double per_step = activity.estimate->seconds_per_step; !check->parsed() && per_step > kAnnounceSeconds)
       std::fprintf(stderr, "stokesian: note: %s: one evaluation is estimated at about %.3g s on one thread%s\n",
                    loaded.source.c_str(), per_step,
                    solve->parsed() ? "" : (" (" + std::to_string(loaded.time.steps) + " steps)").c_str());
