@@ -1141,13 +1141,13 @@ int main(int argc, char** argv) {
 
   long failures = 0;
   std::printf("fuzz_scenes: %ld cases, seed %llu, %zu runs (%ld check, %ld solve) in %.1f s\n", o.cases,
-              (unsigned long long)o.seed, runs.size(), counts["check"]["ok"] + [&] {
+              (unsigned long long)o.seed, runs.size(), counts["check"]["ok"] + counts["check"]["slow_announced"] + [&] {
                 long n = 0;
                 for (const auto& f : failing) n += counts["check"][f];
                 return n;
               }(),
               [&] {
-                long n = counts["solve"]["ok"];
+                long n = counts["solve"]["ok"] + counts["solve"]["slow_announced"];
                 for (const auto& f : failing) n += counts["solve"][f];
                 return n;
               }(),
