@@ -7,6 +7,7 @@
 #include "engine/progress.hpp"
 #include "io/scene_toml.hpp"
 
+#include "support/cli.hpp"
 #include "support/hdf5_read.hpp"
 
 #include <hdf5.h>
@@ -28,49 +29,22 @@ namespace {
 
 const double kPiTest = std::acos(-1.0);
 
-// A scratch folder for this process, removed at exit.
-struct ScratchDir {
-  fs::path path = fs::temp_directory_path() / ("stokesian_cli_" + std::to_string(getpid()));
-  ScratchDir() {
-    fs::remove_all(path);
-    fs::create_directories(path);
-  }
-  ~ScratchDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-};
-
 fs::path scratch() {
-  static const ScratchDir dir;
+  static const test::ScratchDir dir("stokesian_cli_");
   return dir.path;
 }
 
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p);
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
+using test::contains;
+using test::read_text;
+using Result = test::CliResult;
 
-struct Result {
-  int status;
-  std::string out, err;
-};
-
-// Runs `stokesian ARGS` (arguments are not quoted: test paths have no spaces).
-Result cli(const std::string& args, const std::string& env = "") {
-  const fs::path o = scratch() / "stdout.txt", e = scratch() / "stderr.txt";
-  const std::string cmd = env + " " + std::string(STOKESIAN_BINARY) + " " + args + " > " + o.string() + " 2> " + e.string();
-  const int rc = std::system(cmd.c_str());
-  return {WIFEXITED(rc) ? WEXITSTATUS(rc) : -1, read_text(o), read_text(e)};
-}
+Result cli(const std::string& args, const std::string& env = "") { return test::run_stokesian(args, scratch(), env); }
 
 fs::path write_scene(const std::string& name, const std::string& text) {
   const fs::path p = scratch() / name;
   std::ofstream(p) << text;
   return p;
 }
-
-bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
 
 // The number after `label` in `text` (e.g. "stable dt < ").
 double number_after(const std::string& text, const std::string& label) {

@@ -15,6 +15,7 @@
 #include "io/checkpoint.hpp"
 #include "io/scene_toml.hpp"
 
+#include "support/cli.hpp"
 #include "support/hdf5_read.hpp"
 
 #include <hdf5.h>
@@ -35,42 +36,17 @@ using namespace stokesian;
 
 namespace {
 
-bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
-
-struct ScratchDir {
-  fs::path path = fs::temp_directory_path() / ("stokesian_failures_" + std::to_string(getpid()));
-  ScratchDir() {
-    fs::remove_all(path);
-    fs::create_directories(path);
-  }
-  ~ScratchDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-};
 fs::path scratch() {
-  static const ScratchDir dir;
+  static const test::ScratchDir dir("stokesian_failures_");
   return dir.path;
 }
 
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p);
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
-
-struct Result {
-  int status;
-  std::string out, err;
-};
+using test::contains;
+using test::read_text;
+using Result = test::CliResult;
 
 // `stokesian ARGS` run in the scratch folder (paths relative to it).
-Result cli(const std::string& args) {
-  const fs::path o = scratch() / "stdout.txt", e = scratch() / "stderr.txt";
-  const std::string cmd = "cd " + scratch().string() + " && " + std::string(STOKESIAN_BINARY) + " " + args + " > " +
-                          o.string() + " 2> " + e.string();
-  const int rc = std::system(cmd.c_str());
-  return {WIFEXITED(rc) ? WEXITSTATUS(rc) : -1, read_text(o), read_text(e)};
-}
+Result cli(const std::string& args) { return test::run_stokesian(args, scratch(), "", scratch()); }
 
 void write_scene(const std::string& name, const std::string& text) { std::ofstream(scratch() / name) << text; }
 

@@ -6,6 +6,7 @@
 #include "engine/resources.hpp"
 #include "ewald/pme.hpp"
 #include "io/scene_toml.hpp"
+#include "support/cli.hpp"
 
 #include <doctest/doctest.h>
 #include <sys/wait.h>
@@ -21,39 +22,26 @@ using namespace stokesian;
 
 namespace {
 
-struct Cli {
-  int status = -1;
-  std::string out, err;
-};
+using Cli = test::CliResult;
+using test::contains;
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
+// A fresh folder `name` inside this process's scratch folder (removed at exit).
 fs::path scratch(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("stokesian_test_resources_" + std::to_string(::getpid())) / name;
+  static const test::ScratchDir root("stokesian_test_resources_");
+  const fs::path d = root.path / name;
   fs::remove_all(d);
   fs::create_directories(d);
   return d;
 }
 
-// Runs the CLI binary in `dir` with the scene text written to dir/scene.toml and `env` prepended.
+// Runs the CLI binary in `dir` with the scene text written to dir/scene.toml and `env` prepended;
+// its stdout and stderr go to files in the parent folder, so `dir` holds only what the run wrote.
 Cli cli(const fs::path& dir, const std::string& scene, const std::string& args, const std::string& env = "") {
   std::ofstream(dir / "scene.toml") << scene;
-  const std::string cmd = "cd '" + dir.string() + "' && " + env + " '" + STOKESIAN_BINARY + "' " + args +
-                          " > stdout.txt 2> stderr.txt";
-  const int rc = std::system(cmd.c_str());
-  Cli c;
-  c.status = WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
-  c.out = slurp(dir / "stdout.txt");
-  c.err = slurp(dir / "stderr.txt");
-  return c;
+  return test::run_stokesian(args, dir.parent_path(), env, dir);
 }
 
-bool has(const std::string& s, const std::string& what) { return s.find(what) != std::string::npos; }
+bool has(const std::string& s, const std::string& what) { return contains(s, what); }
 
 // 64 spheres on a 4 x 4 x 4 lattice of spacing 3 a, open domain.
 std::string lattice64(const std::string& extra) {
