@@ -203,4 +203,17 @@ GapStats gap_statistics(const std::vector<Vec3>& x, const std::vector<double>& a
   }
 }
 
+GapSurvey survey_overlaps(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain,
+                          std::size_t keep, GapStats& stats) {
+  GapSurvey near = survey_gaps(x, a, domain, kGapSearchRange, keep);
+  stats = near.within > 0 || x.size() < 2 ? near.stats : gap_statistics(x, a, domain);
+  // Overlapping pairs have positive depth, so the `keep` deepest pairs in range hold the `keep`
+  // deepest overlapping ones: drop the rest, and restate the statistics for range 0.
+  near.worst.erase(std::remove_if(near.worst.begin(), near.worst.end(), [](const PairGap& p) { return !(p.gap < 0.0); }),
+                   near.worst.end());
+  near.within = near.stats.overlaps;
+  if (!(near.stats.min_gap < 0.0)) near.stats.min_gap = INFINITY;
+  return near;
+}
+
 }  // namespace stokesian

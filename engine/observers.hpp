@@ -69,6 +69,11 @@ struct GapSurvey {
 };
 GapSurvey survey_gaps(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain, double range,
                       std::size_t keep);
+// Both at once (output steps of a run): the overlapping pairs, as survey_gaps(x, a, domain, 0, keep)
+// returns them, and the gap statistics, as gap_statistics returns them, from one pair search
+// unless no pair lies within 1 a.
+GapSurvey survey_overlaps(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain,
+                          std::size_t keep, GapStats& stats);
 // "(i, j) gap h a (d of the smaller radius), ..." for messages.
 std::string describe_pairs(const std::vector<PairGap>& pairs);
 

@@ -104,8 +104,17 @@ Evaluation Simulation::evaluate_checked(const State& s, const std::vector<Vec3>&
     if (!scene_.forces.pair.empty()) forces::add_pair_forces(scene_.forces.pair, x, s.radius, domain, ev.force, &ev.pair);
   });
   g.add("hydro_setup", hydro_.solver().prepare_uses_threads(n) ? Kind::team : Kind::single, [&] { hydro_.prepare(c); });
-  if (diagnostics) g.add("diagnostics", search, [&] { ev.gaps = gap_statistics(x, s.radius, domain); });
-  if (overlaps) g.add("overlaps", search, [&] { *overlaps = survey_gaps(x, s.radius, domain, 0.0, kReportedPairs); });
+  // Output steps find the overlapping pairs within the gap diagnostics' search (one pair search).
+  if (diagnostics && overlaps)
+    g.add("diagnostics", search, [&] {
+      GapStats stats;
+      *overlaps = survey_overlaps(x, s.radius, domain, kReportedPairs, stats);
+      ev.gaps = stats;
+    });
+  else if (diagnostics)
+    g.add("diagnostics", search, [&] { ev.gaps = gap_statistics(x, s.radius, domain); });
+  else if (overlaps)
+    g.add("overlaps", search, [&] { *overlaps = survey_gaps(x, s.radius, domain, 0.0, kReportedPairs); });
   // Overlap policy ([run] max_overlap): a pair deeper than the threshold stops the run before the
   // solve, and explains a set-up failure (factorisation) that the overlap caused.
   const double max_overlap = scene_.run.max_overlap;

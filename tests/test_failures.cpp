@@ -7,6 +7,7 @@
 #include "engine/app/run.hpp"
 #include "engine/core/errors.hpp"
 #include "engine/core/krylov.hpp"
+#include "engine/core/random.hpp"
 #include "engine/integrators.hpp"
 #include "engine/kernels/far_field.hpp"
 #include "engine/mobility_solver.hpp"
@@ -20,6 +21,7 @@
 
 #include <hdf5.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -348,6 +350,53 @@ TEST_CASE("min_gap is the true smallest surface gap, not capped at 1 a") {
   box.box = Vec3(20, 20, 20);
   CHECK(gap_statistics({{1, 10, 10}, {19, 10, 10}}, {0.5, 0.5}, box).min_gap == doctest::Approx(1.0).epsilon(1e-14));
   CHECK(gap_statistics({{0, 0, 0}, {9, 0, 0}}, {1, 1}, box).min_gap == doctest::Approx(7.0).epsilon(1e-14));
+}
+
+TEST_CASE("survey_overlaps (one pair search on output steps) agrees with the all-pairs definition") {
+  // Reference: every pair by its minimum image (cubic box: componentwise rounding), the overlapping
+  // pairs ranked by depth -h / min(a_i, a_j), and the smallest gap over all pairs.
+  for (const bool periodic : {false, true})
+    for (const int n : {1, 2, 30, 200}) {
+      CAPTURE(periodic);
+      CAPTURE(n);
+      Domain d;
+      const double L = std::cbrt(double(n) * 4.19 / 0.3);  // volume fraction ~0.3 of unit spheres
+      if (periodic) {
+        d.kind = Domain::Kind::periodic;
+        d.box = Vec3(L, L, L);
+      }
+      RandomStream rng = RandomStream::for_purpose(7, Purpose::test, std::uint64_t(n), periodic);
+      std::vector<Vec3> x(static_cast<std::size_t>(n));
+      std::vector<double> a(static_cast<std::size_t>(n));
+      for (int i = 0; i < n; ++i) {
+        x[std::size_t(i)] = Vec3(rng.uniform(), rng.uniform(), rng.uniform()) * L;
+        a[std::size_t(i)] = 0.8 + 0.4 * rng.uniform();
+      }
+      double min_gap = INFINITY;
+      std::vector<PairGap> over;
+      for (int i = 0; i < n; ++i)
+        for (int j = i + 1; j < n; ++j) {
+          Vec3 r = x[std::size_t(j)] - x[std::size_t(i)];
+          if (periodic) r -= L * (r / L).array().round().matrix();
+          const double h = r.norm() - a[std::size_t(i)] - a[std::size_t(j)];
+          min_gap = std::min(min_gap, h);
+          if (h < 0) over.push_back({i, j, h, -h / std::min(a[std::size_t(i)], a[std::size_t(j)])});
+        }
+      std::sort(over.begin(), over.end(), [](const PairGap& u, const PairGap& v) { return u.depth > v.depth; });
+      const std::size_t keep = 5;
+      GapStats stats;
+      const GapSurvey got = survey_overlaps(x, a, d, keep, stats);
+      CHECK(stats.overlaps == long(over.size()));
+      CHECK(got.stats.overlaps == long(over.size()));
+      if (n < 2) CHECK(std::isinf(stats.min_gap));
+      else CHECK(stats.min_gap == doctest::Approx(min_gap).epsilon(1e-12));
+      REQUIRE(got.worst.size() == std::min(keep, over.size()));
+      for (std::size_t k = 0; k < got.worst.size(); ++k) {
+        CHECK(got.worst[k].i == over[k].i);
+        CHECK(got.worst[k].j == over[k].j);
+        CHECK(got.worst[k].gap == doctest::Approx(over[k].gap).epsilon(1e-12));
+      }
+    }
 }
 
 // ------------------------------------------------------------------------------------------------
