@@ -222,7 +222,7 @@ int main_cli(int argc, char** argv) {
       ->type_name("FILE.h5")
       ->default_str("SCENE.h5");
   add_threads(run);
-  run->add_flag("--resume", resume, "Continue an interrupted run from FILE.h5.ckpt");
+  run->add_flag("--resume", resume, "Continue an interrupted or stopped run from FILE.h5.ckpt (after a physics stop, [time] dt and [run] keys may change; docs/reliability.md)");
   run->add_flag("--quiet", quiet, "No model description and no progress on stderr");
   run->add_option("--progress-interval", progress_interval,
                   "Seconds between progress lines (a number >= 0); default 0.5 on a terminal, 10 otherwise")
