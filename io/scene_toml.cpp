@@ -12,6 +12,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -853,8 +855,21 @@ namespace {
 std::string brief_value(const toml::node& n) {
   std::ostringstream o;
   o.precision(17);
-  if (const auto* s = n.as_string()) o << '"' << s->get() << '"';
-  else o << toml::node_view<const toml::node>(&n);
+  if (const auto* s = n.as_string()) {
+    o << '"' << s->get() << '"';
+  } else if (const auto* f = n.as_floating_point()) {
+    // The shortest text that reads back as the same double (0.1, not 0.10000000000000001).
+    for (int digits = 1; digits <= 17; ++digits) {
+      char buf[40];
+      std::snprintf(buf, sizeof buf, "%.*g", digits, f->get());
+      if (std::strtod(buf, nullptr) == f->get() || digits == 17) {
+        o << buf << (std::strpbrk(buf, ".eni") ? "" : ".0");  // a float stays one in TOML: 1.0, not 1
+        break;
+      }
+    }
+  } else {
+    o << toml::node_view<const toml::node>(&n);
+  }
   std::string t = o.str();
   constexpr std::size_t kMax = 60;
   if (t.size() > kMax) t = t.substr(0, kMax - 3) + "...";

@@ -301,6 +301,12 @@ TEST_CASE("resume after editing the scene names the changed keys with both value
   }
   CHECK(io::scene_differences(brownian_box(100), brownian_box(100)).empty());
   CHECK(io::scene_differences(brownian_box(100), brownian_box(100) + "\n# a comment\n").empty());
+  // Values as a user writes them: the shortest text that reads back as the same double.
+  std::string tenth = brownian_box(100);
+  tenth.replace(tenth.find("dt = 1.0"), 8, "dt = 0.1");
+  const auto d = io::scene_differences(brownian_box(100), tenth);
+  REQUIRE(d.size() == 1);
+  CHECK(d[0] == "[time] dt: 1.0 -> 0.1");
 }
 
 TEST_CASE("docs/output.md lists exactly the observables and per-particle elements runs write") {
