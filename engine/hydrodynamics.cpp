@@ -12,7 +12,8 @@ Hydrodynamics::Hydrodynamics(const ResolvedModel& model, double viscosity, const
   const SolverEntry* solver = hydro_solvers().find(solver_of(model_));
   if (!solver) throw std::invalid_argument("Hydrodynamics: no solver \"" + solver_of(model_) + "\"");
   SolverSetup setup;
-  setup.spec = MobilitySpec{model_.moments, viscosity, tolerance};
+  setup.knobs = derive_knobs(tolerance, model_.level);
+  setup.spec = MobilitySpec{model_.moments, viscosity, setup.knobs.far_field};
   setup.near_field = near_field;
   if (solver->needs_far_field) {
     const FarFieldMethodEntry* ff = far_field_methods().find(model_.far_field);

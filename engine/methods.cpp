@@ -2,6 +2,7 @@
 
 #include "engine/kernels/far_field.hpp"
 #include "engine/mobility_solver.hpp"
+#include "engine/sd_accelerated.hpp"
 #include "engine/sd_dense.hpp"
 #include "ewald/ewald_reference.hpp"
 #include "ewald/pme.hpp"
@@ -32,10 +33,15 @@ Registry<SolverEntry> make_solvers() {
          [](SolverSetup s) { return std::make_unique<FreeDrainingSolver>(s.spec); }});
   r.add({"mobility_cg", "far-field mobility, constrained entries by conjugate gradients", HydroModel::far_field,
          true, false, true, 0, 0,
-         [](SolverSetup s) { return std::make_unique<MobilitySolver>(std::move(s.far_field), s.spec.tolerance); }});
+         [](SolverSetup s) { return std::make_unique<MobilitySolver>(std::move(s.far_field), s.knobs.mobility_cg); }});
   r.add({"dense_sd", "far field + lubrication, dense Cholesky (reference)", HydroModel::stokesian, true, true, false,
          kDenseSdMaxOpen, kDenseSdMaxPeriodic, [](SolverSetup s) {
            return std::make_unique<DenseStokesianDynamics>(std::move(s.far_field), s.spec.viscosity, s.near_field);
+         }});
+  r.add({"accelerated_sd", "far field + lubrication, matrix-free GMRES preconditioned by the CHOLMOD factor of the near field",
+         HydroModel::stokesian, true, false, false, 0, 0, [](SolverSetup s) {
+           return std::make_unique<AcceleratedStokesianDynamics>(std::move(s.far_field), s.spec.viscosity, s.near_field,
+                                                                 s.knobs.krylov);
          }});
   return r;
 }

@@ -4,6 +4,7 @@
 // Simulation builds what was chosen. Adding a far-field method, a solver or an integrator is
 // adding its class in its folder and one entry in engine/methods.cpp.
 #include "engine/core/operators.hpp"
+#include "engine/accuracy.hpp"
 #include "engine/core/registry.hpp"
 #include "engine/core/scene.hpp"
 #include "engine/hydro_solver.hpp"
@@ -29,6 +30,7 @@ struct SolverSetup {
   MobilitySpec spec;                      // moments, viscosity, tolerance
   std::unique_ptr<MobilityOperator> far_field;  // made from the chosen far-field entry (nullptr for free draining)
   lubrication::NearFieldParams near_field;
+  AccuracyKnobs knobs;                    // inner tolerances from the scene's (engine/accuracy.hpp)
 };
 
 struct SolverEntry {

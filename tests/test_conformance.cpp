@@ -289,7 +289,8 @@ TEST_CASE("every hydrodynamic solver: constrained solves with noise terms agains
             CAPTURE(to_string(m));
             CAPTURE(tol);
             SolverSetup setup;
-            setup.spec = MobilitySpec{m, mu, tol};
+            setup.knobs = derive_knobs(tol, solver.level);
+            setup.spec = MobilitySpec{m, mu, setup.knobs.far_field};
             if (method) setup.far_field = method->make(setup.spec);
             auto s = solver.make(std::move(setup));
             CHECK(s->needs_drift() == (solver.level == HydroModel::stokesian));
@@ -350,7 +351,8 @@ TEST_CASE("every solver that samples Brownian motion: displacements of covarianc
       CAPTURE(solver.name);
       CAPTURE(to_string(m));
       SolverSetup setup;
-      setup.spec = MobilitySpec{m, mu, 1e-10};
+      setup.knobs = derive_knobs(1e-10, solver.level);
+      setup.spec = MobilitySpec{m, mu, setup.knobs.far_field};
       if (solver.needs_far_field) setup.far_field = far_field_methods().find("direct")->make(setup.spec);
       auto s = solver.make(std::move(setup));
       s->prepare({c.x, c.a, c.domain});

@@ -7,6 +7,13 @@
 //   Comput. 36, A1092, alg. 2.1): y_k = |z| V_k T_k^{1/2} e_1, stopped when successive iterates
 //   differ by less than tol relative.
 //
+// gmres: restarted GMRES(m) for a general (nonsymmetric) A (Saad & Schultz 1986): the iterate of
+//   least residual norm over the Krylov space, Arnoldi with modified Gram-Schmidt and one
+//   reorthogonalisation pass, Givens rotations for the small least-squares problem; restarted
+//   every `restart` iterations from the true residual. Stops when |b - A x| <= tol |b|.
+// bicgstab: van der Vorst's (1992) BiCGStab, two products per iteration and short recurrences;
+//   kept as the alternative the accelerated SD solver was measured against (bench_asd).
+//
 // Failure detection (docs/reliability.md, "Failure policies during a run"). Both methods stop
 // early, instead of running to max_iter, and say why (KrylovResult::status):
 //   non_finite  a residual, step length or Lanczos coefficient is NaN or infinite (a non-finite
@@ -24,6 +31,8 @@
 //               above the tolerance CG restarts from it;
 //   round_off   CG only: such a restart did not halve the true residual: the tolerance is below
 //               what double precision reaches for this system;
+//   stagnated   GMRES: a whole restart cycle did not reduce the residual by 1 %; BiCGStab: a
+//               breakdown (rho or omega = 0);
 //   max_iterations  the cap was reached while still progressing.
 // A Lanczos "happy breakdown" (beta_k = 0: the Krylov space is invariant) is exact convergence.
 #include "engine/core/types.hpp"
@@ -39,6 +48,7 @@ enum class KrylovStatus { converged, max_iterations, stagnated, round_off, indef
 
 struct KrylovResult {
   int iterations = 0;
+  int products = 0;  // operator applications (gmres, bicgstab)
   double relative_residual = 0.0;  // CG: |b - A x|/|b|; Lanczos: last relative change
   bool converged = false;
   KrylovStatus status = KrylovStatus::max_iterations;
@@ -52,6 +62,13 @@ std::string describe(const KrylovResult& r);
 constexpr int kStagnationWindow = 200;
 
 KrylovResult conjugate_gradient(const LinearOperator& A, const VecX& b, VecX& x, double tol, int max_iter);
+
+KrylovResult gmres(const LinearOperator& A, const VecX& b, VecX& x, double tol, int max_iter, int restart = 40);
+
+KrylovResult bicgstab(const LinearOperator& A, const VecX& b, VecX& x, double tol, int max_iter);
+
+// Products with A made by a Krylov call: GMRES one per iteration plus one per restart (the true
+// residual), BiCGStab two per iteration.
 
 KrylovResult lanczos_sqrt(const LinearOperator& A, const VecX& z, VecX& y, double tol, int max_iter);
 

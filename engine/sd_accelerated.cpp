@@ -1,0 +1,190 @@
+#include "engine/sd_accelerated.hpp"
+
+#include "engine/core/errors.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+namespace stokesian {
+
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// Self resistance per generalised entry: 6 pi mu a (F), 8 pi mu a^3 (T), 20/3 pi mu a^3 (S, in
+// the orthonormal symmetric-traceless coordinates of engine/core/sym_traceless.hpp), the inverse of
+// the self mobility of engine/kernels/far_field.hpp.
+VecX self_resistance(const std::vector<double>& a, double mu, Moments m) {
+  const int d = dof_per_particle(m);
+  VecX D(long(a.size()) * d);
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    const double r = a[i], r3 = r * r * r;
+    for (int c = 0; c < d; ++c)
+      D[long(i) * d + c] = c < 3 ? 6.0 * kPi * mu * r : c < 6 ? 8.0 * kPi * mu * r3 : 20.0 / 3.0 * kPi * mu * r3;
+  }
+  return D;
+}
+
+}  // namespace
+
+AcceleratedStokesianDynamics::AcceleratedStokesianDynamics(std::unique_ptr<MobilityOperator> far_field, double mu,
+                                                           lubrication::NearFieldParams p, double krylov_tolerance,
+                                                           double shift, Method method)
+    : m_(far_field->moments()), mu_(mu), op_(std::move(far_field)), near_(m_, mu, p), tol_(krylov_tolerance),
+      shift_(shift), method_(method) {}
+
+void AcceleratedStokesianDynamics::prepare(const Configuration& c) {
+  auto t0 = std::chrono::steady_clock::now();
+  op_->set_configuration(c);
+  stats_.seconds_far_field_setup = seconds_since(t0);
+  t0 = std::chrono::steady_clock::now();
+  config_.store(c);
+  near_stats_ = {};
+  Rnf_ = near_.assemble(c.x, c.a, c.domain, &near_stats_);
+  D_ = self_resistance(c.a, mu_, m_);
+  stats_.seconds_near_field_assembly = seconds_since(t0);
+  if (!factored_) {  // first configuration: the entries of mobile particles' forces (no fixed particles)
+    const int d = dof_per_particle(m_), dv = m_ == Moments::FTS ? 6 : d;
+    factored_v_.clear();
+    for (long i = 0; i < long(c.x.size()); ++i)
+      for (int q = 0; q < dv; ++q) factored_v_.push_back(i * d + q);
+  }
+  factorise(factored_v_);
+}
+
+// R~ = R_nf restricted to the entries v, plus the shift on its diagonal; factorised by CHOLMOD.
+void AcceleratedStokesianDynamics::factorise(const std::vector<long>& v) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const long n = Rnf_.rows();
+  std::vector<int> pos(std::size_t(n), -1);
+  for (std::size_t i = 0; i < v.size(); ++i) pos[std::size_t(v[i])] = int(i);
+  std::vector<Eigen::Triplet<double, int>> t;
+  t.reserve(std::size_t(Rnf_.nonZeros()) / 2 + v.size());
+  for (int col = 0; col < Rnf_.outerSize(); ++col) {
+    const int cj = pos[std::size_t(col)];
+    if (cj < 0) continue;
+    for (lubrication::SparseMatrix::InnerIterator it(Rnf_, col); it; ++it) {
+      const int ri = pos[std::size_t(it.row())];
+      if (ri >= 0 && ri <= cj) t.emplace_back(ri, cj, it.value());
+    }
+  }
+  for (std::size_t i = 0; i < v.size(); ++i) t.emplace_back(int(i), int(i), shift_ * D_[v[i]]);
+  lubrication::SparseMatrix Rt(long(v.size()), long(v.size()));
+  Rt.setFromTriplets(t.begin(), t.end());
+  try {
+    factor_.factorize(Rt);
+  } catch (const NotPositiveDefinite& e) {
+    // R_nf is a sum of positive semi-definite pair blocks, so R_nf + B fails only with a pair
+    // block that is not: name the particle of the failing entry and its closest neighbour.
+    const int d = dof_per_particle(m_);
+    const long p = e.column >= 0 && e.column < long(v.size()) ? v[std::size_t(e.column)] / d : -1;
+    std::ostringstream o;
+    o << "accelerated SD: the near-field resistance plus shift is not positive definite (" << e.what() << ")";
+    if (p >= 0) {
+      long q = -1;
+      double best = 1e300;
+      for (long j = 0; j < long(config_.x.size()); ++j) {
+        if (j == p) continue;
+        const double r = config_.domain.minimum_image(config_.x[std::size_t(p)] - config_.x[std::size_t(j)]).norm();
+        const double xi = 2.0 * r / (config_.a[std::size_t(p)] + config_.a[std::size_t(j)]) - 2.0;
+        if (xi < best) best = xi, q = j;
+      }
+      o << " at particle " << p;
+      if (q >= 0) o << "; closest pair (" << p << ", " << q << ") at symmetric gap " << best;
+    }
+    throw PhysicsError(o.str());
+  }
+  factored_v_ = v;
+  factored_ = true;
+  stats_.factor_nonzeros = factor_.factor_nonzeros();
+  stats_.seconds_factorisation = seconds_since(t0);
+}
+
+HydroResult AcceleratedStokesianDynamics::solve(const HydroProblem& p) {
+  const RigidConstraints c = RigidConstraints::of(m_, p.fixed, p.force, p.torque, p.flow);
+  const std::vector<long>& v = c.force_given;
+  if (!factored_ || v != factored_v_) factorise(v);
+  const long n = long(c.force.size()), nv = long(v.size());
+  const auto t0 = std::chrono::steady_clock::now();
+
+  // g = f_v + f_B,v - R_vk V_k (c.motion vanishes at v).
+  const VecX RVk = Rnf_ * c.motion;
+  VecX g(nv);
+  for (long i = 0; i < nv; ++i) {
+    const long e = v[std::size_t(i)];
+    g[i] = c.force[e] - RVk[e] + (p.force_noise ? (*p.force_noise)[e] : 0.0);
+  }
+  VecX Bv(nv);
+  for (long i = 0; i < nv; ++i) Bv[i] = shift_ * D_[v[std::size_t(i)]];
+  // Q z: R~^{-1} on the v entries, zero elsewhere.
+  auto applyQ = [&](const VecX& z, VecX& out) {
+    VecX zv(nv);
+    for (long i = 0; i < nv; ++i) zv[i] = z[v[std::size_t(i)]];
+    const VecX s = nv > 0 ? factor_.solve(zv) : VecX();
+    out.setZero(n);
+    for (long i = 0; i < nv; ++i) out[v[std::size_t(i)]] = s[i];
+  };
+  int products = 0;
+  VecX Mz, y, t, q;
+  // Right-hand side D [ (I - M B^) Q g~ + P_k V_k - u_s ].
+  VecX gfull = VecX::Zero(n);
+  for (long i = 0; i < nv; ++i) gfull[v[std::size_t(i)]] = g[i];
+  applyQ(gfull, y);
+  t = VecX::Zero(n);
+  for (long i = 0; i < nv; ++i) t[v[std::size_t(i)]] = Bv[i] * y[v[std::size_t(i)]];
+  op_->apply(t, Mz);
+  ++products;
+  VecX b = y - Mz + c.motion;
+  if (p.slip) b -= *p.slip;
+  b = D_.cwiseProduct(b);
+  // Operator W -> D [ M (W - B^ Q W) + Q W ].
+  const LinearOperator A = [&](const VecX& W, VecX& out) {
+    applyQ(W, q);
+    t = W;
+    for (long i = 0; i < nv; ++i) t[v[std::size_t(i)]] -= Bv[i] * q[v[std::size_t(i)]];
+    op_->apply(t, out);
+    out += q;
+    out.array() *= D_.array();
+  };
+  VecX W = VecX::Zero(n);
+  const KrylovResult kr = method_ == Method::gmres ? gmres(A, b, W, tol_, kMaxIterations, kRestart)
+                                                   : bicgstab(A, b, W, tol_, kMaxIterations);
+  products += kr.products;
+  stats_.iterations = kr.iterations;
+  stats_.far_field_products = products;
+  stats_.relative_residual = kr.relative_residual;
+  stats_.seconds_krylov = seconds_since(t0);
+  if (!kr.converged) {
+    std::ostringstream o;
+    o << "accelerated SD: the Krylov solve " << describe(kr) << " after " << kr.iterations
+      << " iterations (relative residual " << kr.relative_residual << ", asked " << tol_ << ") for "
+      << config_.x.size() << " particles";
+    if (near_stats_.worst_i >= 0)
+      o << "; closest pair (" << near_stats_.worst_i << ", " << near_stats_.worst_j << ") at symmetric gap "
+        << near_stats_.min_xi;
+    throw PhysicsError(o.str());
+  }
+  // V_v = R~^{-1}(g - W_v); X = W + B^ V; F = X + R_nf V.
+  VecX rv(nv);
+  for (long i = 0; i < nv; ++i) rv[i] = g[i] - W[v[std::size_t(i)]];
+  const VecX Vv = nv > 0 ? factor_.solve(rv) : VecX();
+  VecX V = c.motion, X = W;
+  for (long i = 0; i < nv; ++i) {
+    V[v[std::size_t(i)]] = Vv[i];
+    X[v[std::size_t(i)]] += Bv[i] * Vv[i];
+  }
+  const VecX F = X + Rnf_ * V;
+  HydroResult res = unpack_solution(m_, p.flow, V, F, p.fixed);
+  res.iterations = kr.iterations;
+  return res;
+}
+
+std::vector<Vec3> AcceleratedStokesianDynamics::brownian_displacement(double, double, Rng&) {
+  throw PhysicsError("accelerated Stokesian dynamics does not sample Brownian motion yet (near-field noise and "
+                     "drift come with the Brownian SD issue)");
+}
+
+}  // namespace stokesian

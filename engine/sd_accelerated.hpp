@@ -1,0 +1,89 @@
+#pragma once
+// Accelerated Stokesian dynamics: the SD problem of engine/hydro_solver.hpp,
+//     R V = f + f_B + M_inf^{-1} u_s,   R = M_inf^{-1} + R_nf,
+// solved without forming M_inf or its inverse (Sierou & Brady 2001; the constrained form of
+// Lee et al. 2024, s. 2.1.3, eqs. 2.45-2.47, rederived in ../shared/notes/seed1.md s. 1.10).
+//
+// Unknowns: the far-field moments X = M_inf^{-1}(V - u_s) of every entry and the motion V_v of the
+// entries whose force is given (index sets v / k of engine/core/layout.hpp: V_k is the given
+// motion: -E_inf for the stresslets, rest for fixed particles). The two conditions are
+//     V = M_inf X + u_s                                  (far field, all entries)
+//     X_v + R_vv V_v = g,  g = f_v + f_B,v - R_vk V_k     (given forces; R = R_nf here)
+// With a positive diagonal shift B on the v entries, R~ = R_vv + B (sparse, positive definite,
+// factorised once per configuration by CHOLMOD), and W = X - P_v B V_v, the second condition is
+// V_v = R~^{-1} (g - W_v) and the first becomes, with Q = P_v R~^{-1} P_v^T and B^ = P_v B P_v^T,
+//     [ M_inf (I - B^ Q) + Q ] W = (I - M_inf B^) Q g~ + P_k V_k - u_s            (eq. 2.47)
+// An exact change of variables: V does not depend on B (tested); B only conditions the system.
+// We take B = D_v, D the diagonal of the self resistance (6 pi mu a, 8 pi mu a^3, 20 pi mu a^3/3
+// per translational, rotational, stresslet component), and scale the rows by D: with
+// M_inf ~ D^{-1} (no interactions) and no given motion the operator is D (I + M R_nf)(R_nf + D)^{-1}
+// = I exactly, so its eigenvalues cluster at 1 and the far-field interactions alone set the
+// iteration count. Each iteration costs one far-field product and one pair of triangular solves.
+// Afterwards V_v = R~^{-1}(g - W_v), X = W + B^ V, and the moments are F = X + R_nf V (the given
+// force plus noise at v by construction, the stresslets and holding forces at k).
+//
+// Krylov method (bench/bench_asd.cpp, "krylov methods"): the operator is not symmetric, so CG does
+// not apply; restarted GMRES takes one product per iteration and needed fewer products than
+// BiCGStab (two per iteration) at every phi and N measured; see docs/accelerated_sd.md.
+//
+// Fixed particles change the index set v; the factor of R~ is kept for the set of the last solve
+// (prepare() factorises for the set last used, solve() refactorises when the set changes).
+#include "engine/core/krylov.hpp"
+#include "engine/hydro_solver.hpp"
+#include "lubrication/near_field.hpp"
+
+#include <memory>
+
+namespace stokesian {
+
+struct AcceleratedSdStats {
+  int iterations = 0;           // GMRES iterations of the last solve
+  int far_field_products = 0;   // far-field products of the last solve (right-hand side + iterations)
+  double relative_residual = 0.0;
+  long factor_nonzeros = 0;     // fill of the CHOLMOD factor of R~
+  double seconds_far_field_setup = 0.0, seconds_near_field_assembly = 0.0, seconds_factorisation = 0.0;
+  double seconds_krylov = 0.0;  // last solve's Krylov iterations (products and triangular solves)
+};
+
+class AcceleratedStokesianDynamics final : public HydroSolver {
+ public:
+  enum class Method { gmres, bicgstab };
+  // krylov_tolerance: relative residual of the row-scaled system (engine/accuracy.hpp);
+  // shift: B = shift * D (any positive value gives the same answer).
+  AcceleratedStokesianDynamics(std::unique_ptr<MobilityOperator> far_field, double mu,
+                               lubrication::NearFieldParams p, double krylov_tolerance, double shift = 1.0,
+                               Method method = Method::gmres);
+
+  const char* name() const override { return "accelerated_sd"; }
+  Moments moments() const override { return m_; }
+  void prepare(const Configuration& c) override;
+  HydroResult solve(const HydroProblem& p) override;
+  std::vector<Vec3> brownian_displacement(double kT, double dt, Rng& rng) override;
+  bool needs_drift() const override { return true; }
+  bool prepare_uses_threads(long n) const override { return op_->set_configuration_uses_threads(n); }
+  const MobilityOperator* far_field() const override { return op_.get(); }
+
+  const AcceleratedSdStats& stats() const { return stats_; }
+  const lubrication::NearFieldStats& near_field_stats() const { return near_stats_; }
+  static constexpr int kMaxIterations = 2000;
+  static constexpr int kRestart = 40;
+
+ private:
+  void factorise(const std::vector<long>& v);
+  Moments m_;
+  double mu_;
+  std::unique_ptr<MobilityOperator> op_;
+  lubrication::NearField near_;
+  double tol_, shift_;
+  Method method_;
+  StoredConfiguration config_;
+  lubrication::SparseMatrix Rnf_;
+  lubrication::NearFieldStats near_stats_;
+  VecX D_;                       // self resistance per entry
+  std::vector<long> factored_v_;  // index set of the factor below
+  bool factored_ = false;
+  lubrication::CholmodFactor factor_;
+  AcceleratedSdStats stats_;
+};
+
+}  // namespace stokesian
