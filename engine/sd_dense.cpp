@@ -4,11 +4,52 @@
 #include "engine/kernels/far_field.hpp"
 #include "ewald/ewald_reference.hpp"
 
+#include <cstddef>
+#include <limits>
 #include <sstream>
+#include <stdexcept>
+
+// LAPACK (Fortran interface; the trailing arguments are the lengths of the character arguments).
+extern "C" {
+void dpotrf_(const char* uplo, const int* n, double* a, const int* lda, int* info, std::size_t);
+void dpotri_(const char* uplo, const int* n, double* a, const int* lda, int* info, std::size_t);
+void dpotrs_(const char* uplo, const int* n, const int* nrhs, const double* a, const int* lda, double* b,
+             const int* ldb, int* info, std::size_t);
+}
 
 namespace stokesian {
 
 namespace {
+
+using SparseMat = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
+
+namespace lapack {
+int dim(long n) {
+  if (n > long(std::numeric_limits<int>::max())) throw std::length_error("dense SD: matrix too large for LAPACK");
+  return int(n);
+}
+// Cholesky A = L L^T in the lower triangle (the strict upper triangle is left alone); 0 on success.
+int potrf(MatX& A) {
+  const int n = dim(A.rows());
+  int info = 0;
+  if (n > 0) dpotrf_("L", &n, A.data(), &n, &info, 1);
+  return info;
+}
+// From the factor L (lower triangle): (L L^T)^{-1} in the lower triangle.
+int potri(MatX& A) {
+  const int n = dim(A.rows());
+  int info = 0;
+  if (n > 0) dpotri_("L", &n, A.data(), &n, &info, 1);
+  return info;
+}
+// x <- (L L^T)^{-1} x.
+void potrs(const MatX& L, VecX& x) {
+  const int n = dim(L.rows()), one = 1;
+  int info = 0;
+  if (n > 0) dpotrs_("L", &n, &one, L.data(), &n, x.data(), &n, &info, 1);
+  if (info != 0) throw std::logic_error("dense SD: dpotrs failed");
+}
+}  // namespace lapack
 
 // First generalised entry m at which the Cholesky factorisation of the symmetric matrix A breaks
 // down: the smallest m whose leading (m+1) x (m+1) block is not positive definite (every leading
@@ -72,50 +113,118 @@ void DenseStokesianDynamics::prepare(const Configuration& c) {
   op_->set_configuration(c);
   const MatX* M = op_->dense();
   if (!M) throw std::logic_error(std::string("dense Stokesian dynamics needs a dense far field, not \"") + op_->name() + "\"");
-  Eigen::LLT<MatX> llt(*M);
-  if (llt.info() != Eigen::Success) {
+  have_Rvv_ = have_R_ = false;
+  const int d = dof_per_particle(m_);
+  const long n = long(M->rows()), np = n / d;
+  // Factored order: the stresslet entries of every particle, then the force/torque entries.
+  perm_.clear();
+  if (d > 6)
+    for (long i = 0; i < np; ++i)
+      for (int k = 6; k < d; ++k) perm_.push_back(i * d + k);
+  n0_ = long(perm_.size());
+  for (long i = 0; i < np; ++i)
+    for (int k = 0; k < std::min(d, 6); ++k) perm_.push_back(i * d + k);
+  pos_.assign(std::size_t(n), 0);
+  for (long r = 0; r < n; ++r) pos_[std::size_t(perm_[std::size_t(r)])] = r;
+  L_.resize(n, n);
+#pragma omp parallel for schedule(static)
+  for (long col = 0; col < n; ++col) {
+    const double* src = M->data() + perm_[std::size_t(col)] * n;
+    double* dst = L_.data() + col * n;
+    for (long r = col; r < n; ++r) dst[r] = src[perm_[std::size_t(r)]];
+  }
+  if (lapack::potrf(L_) != 0) {
     const long e = first_failing_entry(*M);
     throw PhysicsError("far-field mobility is not positive definite: its Cholesky factorisation fails at " +
                        (e >= 0 ? failing_particles(e / dof_per_particle(m_), c) : std::string("an unknown entry")));
   }
-  R_ = llt.solve(MatX::Identity(M->rows(), M->cols()));
+  const long nt = n - n0_;
+  Rtt_ = L_.bottomRightCorner(nt, nt);
+  if (lapack::potri(Rtt_) != 0) throw std::logic_error("dense SD: dpotri failed on a factored far-field block");
+  // Near field, symmetrised, added to the force/torque block.
   stats_ = {};
-  R_ += MatX(near_.assemble(c.x, c.a, c.domain, &stats_));
-  R_ = (0.5 * (R_ + R_.transpose())).eval();
+  const auto N = near_.assemble(c.x, c.a, c.domain, &stats_);
+  Rnf_ = 0.5 * (N + SparseMat(N.transpose()));
+#pragma omp parallel for schedule(static)
+  for (long col = 0; col < nt; ++col)  // mirror the lower triangle dpotri wrote
+    for (long r = 0; r < col; ++r) Rtt_(r, col) = Rtt_(col, r);
+  for (int k = 0; k < Rnf_.outerSize(); ++k)
+    for (SparseMat::InnerIterator it(Rnf_, k); it; ++it) {
+      const long r = pos_[std::size_t(it.row())] - n0_, q = pos_[std::size_t(it.col())] - n0_;
+      if (r >= 0 && q >= 0) Rtt_(r, q) += it.value();
+    }
+}
+
+VecX DenseStokesianDynamics::apply_inverse_mobility(const VecX& x) const {
+  const long n = long(perm_.size());
+  VecX y(n);
+  for (long r = 0; r < n; ++r) y[r] = x[perm_[std::size_t(r)]];
+  lapack::potrs(L_, y);
+  VecX out(n);
+  for (long r = 0; r < n; ++r) out[perm_[std::size_t(r)]] = y[r];
+  return out;
+}
+
+const MatX& DenseStokesianDynamics::resistance() const {
+  if (have_R_) return R_;
+  const long n = long(perm_.size());
+  MatX X = L_;
+  if (lapack::potri(X) != 0) throw std::logic_error("dense SD: dpotri failed on the factored far field");
+  R_.resize(n, n);
+#pragma omp parallel for schedule(static)
+  for (long col = 0; col < n; ++col)
+    for (long r = col; r < n; ++r) R_(perm_[std::size_t(r)], perm_[std::size_t(col)]) = R_(perm_[std::size_t(col)], perm_[std::size_t(r)]) = X(r, col);
+  R_ += MatX(Rnf_);
+  have_R_ = true;
+  return R_;
 }
 
 HydroResult DenseStokesianDynamics::solve(const HydroProblem& p) {
   const RigidConstraints c = RigidConstraints::of(m_, p.fixed, p.force, p.torque, p.flow);
   const std::vector<long>& v = c.force_given;   // unknown motion
-  const std::vector<long>& k = c.motion_given;  // known motion
   // Right-hand side f + f_B + M_inf^{-1} u_s (engine/hydro_solver.hpp).
   VecX noise = VecX::Zero(c.force.size()), slip_force;
   if (p.force_noise)
     for (long q : v) noise[q] += (*p.force_noise)[q];
   if (p.slip) {
-    slip_force = op_->dense()->llt().solve(*p.slip);
+    slip_force = apply_inverse_mobility(*p.slip);
     noise += slip_force;
   }
-  MatX Rvv(v.size(), v.size());
-  VecX rhs(v.size());
-  for (std::size_t i = 0; i < v.size(); ++i) {
-    double s = c.force[v[i]] + noise[v[i]];
-    for (long q : k) s -= R_(v[i], q) * c.motion[q];
-    rhs[long(i)] = s;
-    for (std::size_t j = 0; j < v.size(); ++j) Rvv(long(i), long(j)) = R_(v[i], v[j]);
+  const long nv = long(v.size());
+  if (!have_Rvv_ || v != v_) {
+    Rvv_.resize(nv, nv);
+    for (long j = 0; j < nv; ++j) {
+      const long q = pos_[std::size_t(v[std::size_t(j)])] - n0_;
+      if (q < 0) throw std::logic_error("dense SD: an entry with given force outside the force/torque block");
+      for (long i = 0; i < nv; ++i) Rvv_(i, j) = Rtt_(pos_[std::size_t(v[std::size_t(i)])] - n0_, q);
+    }
+    const VecX diagonal = Rvv_.diagonal();
+    have_Rvv_ = false;
+    if (lapack::potrf(Rvv_) != 0) {
+      // dpotrf overwrote the lower triangle: rebuild R_vv from the upper one and the diagonal.
+      MatX A = Rvv_.triangularView<Eigen::StrictlyUpper>();
+      A += MatX(A.transpose());
+      A.diagonal() = diagonal;
+      const long e = first_failing_entry(A);
+      throw PhysicsError("SD resistance matrix (far field + near field) is not positive definite: its Cholesky "
+                         "factorisation fails at " +
+                         (e >= 0 ? failing_particles(v[std::size_t(e)] / dof_per_particle(m_), p.config)
+                                 : std::string("an unknown entry")));
+    }
+    v_ = v;
+    have_Rvv_ = true;
   }
-  Eigen::LLT<MatX> llt(Rvv);
-  if (llt.info() != Eigen::Success) {
-    const long e = first_failing_entry(Rvv);
-    throw PhysicsError("SD resistance matrix (far field + near field) is not positive definite: its Cholesky "
-                       "factorisation fails at " +
-                       (e >= 0 ? failing_particles(v[std::size_t(e)] / dof_per_particle(m_), p.config)
-                               : std::string("an unknown entry")));
+  // R_vk V_k: the given motion (zero at v) through M_inf^{-1} and the near field.
+  const VecX given = apply_inverse_mobility(c.motion) + Rnf_ * c.motion;
+  VecX V(nv);
+  for (long i = 0; i < nv; ++i) {
+    const long q = v[std::size_t(i)];
+    V[i] = c.force[q] + noise[q] - given[q];
   }
-  const VecX V = llt.solve(rhs);
+  lapack::potrs(Rvv_, V);
   VecX gen = c.motion;  // full generalised motion [U - u_inf, Omega - Omega_inf, -E_inf]
-  for (std::size_t i = 0; i < v.size(); ++i) gen[v[i]] = V[long(i)];
-  VecX moments = R_ * gen;  // f + f_B + M^{-1} u_s at given entries
+  for (long i = 0; i < nv; ++i) gen[v[std::size_t(i)]] = V[i];
+  VecX moments = apply_inverse_mobility(gen) + Rnf_ * gen;  // f + f_B + M^{-1} u_s at given entries
   if (p.slip) moments -= slip_force;
   return unpack_solution(m_, p.flow, gen, moments, p.fixed);
 }
@@ -128,7 +237,7 @@ MatX DenseStokesianDynamics::resistance(const std::vector<Vec3>& x, const std::v
                                         lubrication::NearFieldStats* stats) {
   prepare({x, a, domain});
   if (stats) *stats = stats_;
-  return R_;
+  return resistance();
 }
 
 HydroResult DenseStokesianDynamics::mobility_problem(const std::vector<Vec3>& x, const std::vector<double>& a,

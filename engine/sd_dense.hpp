@@ -12,8 +12,17 @@
 //     R_vv V_v = f_v - R_vk V_k (+ the noise terms of engine/hydro_solver.hpp), V_k the given
 //     motion (fixed particles at rest, -E_inf); the remaining rows then give S and the holding
 //     forces. R_vv is solved by dense Cholesky.
-// prepare() forms M_inf^{-1} (dense Cholesky) and assembles R_nf. O(N^3): meant for small N and
-// as the oracle of the accelerated solver.
+// Linear algebra (LAPACK, multithreaded through the BLAS): prepare() orders the entries as
+// [t-complement, t] with t the force/torque entries (all entries below FTS), factors
+// P M_inf P^T = L L^T (dpotrf, n^3/3 flops) and inverts only the trailing block:
+//   (M_inf^{-1})_tt = (L_tt L_tt^T)^{-1}        (dpotri on L_tt, 2 n_t^3 / 3 flops)
+// because L^{-1} is lower triangular, so its trailing block is L_tt^{-1} [block Cholesky; Golub &
+// Van Loan, Matrix Computations, 4th ed., sec. 4.2]. L_tt L_tt^T is the Schur complement of the
+// stresslet block, so R_tt = (M^{-1})_tt + R_nf,tt is exact, not an approximation. Products with
+// M_inf^{-1} (the given-motion columns, the slip, the recovered moments) are two triangular solves
+// with L, O(n^2). solve() factors R_vv (v within t, dpotrf) and keeps the factor while the set of
+// fixed particles is unchanged. The full R (resistance()) is formed only when asked for.
+// O(N^3): meant for small N and as the oracle of the accelerated solver.
 #include "engine/core/flow.hpp"
 #include "engine/hydro_solver.hpp"
 #include "lubrication/near_field.hpp"
@@ -38,8 +47,8 @@ class DenseStokesianDynamics final : public HydroSolver {
   // Dense Cholesky and the near-field assembly use every thread.
   bool prepare_uses_threads(long) const override { return true; }
   const MobilityOperator* far_field() const override { return op_.get(); }
-  // R of the prepared configuration, and its near-field statistics.
-  const MatX& resistance() const { return R_; }
+  // R of the prepared configuration (formed on first request), and its near-field statistics.
+  const MatX& resistance() const;
   const lubrication::NearFieldStats& near_field_stats() const { return stats_; }
 
   // Conveniences for the reference use (prepare + one problem, the flow given at construction).
@@ -61,8 +70,20 @@ class DenseStokesianDynamics final : public HydroSolver {
   bool reference_ = false;   // operator chosen per domain kind (reference constructor)
   std::unique_ptr<MobilityOperator> op_;
   lubrication::NearField near_;
-  MatX R_;
   lubrication::NearFieldStats stats_;
+  std::vector<long> perm_;   // perm_[r] = generalised entry at row r of the factored order
+  std::vector<long> pos_;    // inverse of perm_
+  long n0_ = 0;              // rows before the trailing (force/torque) block
+  MatX L_;                   // Cholesky factor of P M_inf P^T (lower triangle)
+  MatX Rtt_;                 // (M_inf^{-1})_tt + R_nf,tt, factored order, both triangles
+  lubrication::SparseMatrix Rnf_;  // near-field resistance (symmetrised), generalised layout
+  // Factor of R_vv for the set v of the last solve.
+  std::vector<long> v_;
+  MatX Rvv_;
+  bool have_Rvv_ = false;
+  mutable MatX R_;
+  mutable bool have_R_ = false;
+  VecX apply_inverse_mobility(const VecX& x) const;  // M_inf^{-1} x through L
 };
 
 }  // namespace stokesian

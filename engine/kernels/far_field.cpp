@@ -27,6 +27,29 @@ MatX dense_mobility(const std::vector<Vec3>& x, const std::vector<double>& a, do
   return M;
 }
 
+MatX assemble_mobility(const std::vector<Vec3>& x, const std::vector<double>& a, double mu, Moments m) {
+  const int d = dof_per_particle(m);
+  const long n = long(x.size()), ld = n * d;
+  MatX M(ld, ld);
+  // Every block is computed (both orders of each pair), so the symmetry of M stays a property of
+  // the formulas, as in dense_mobility.
+#pragma omp parallel for schedule(static)
+  for (long j = 0; j < n; ++j) {  // block column j: contiguous storage
+    double* col = M.data() + j * d * ld;
+    for (long i = 0; i < n; ++i) {
+      if (i == j) {
+        mobility::fill_pair_block(mobility::self_scalars(a[i], mu), Vec3::UnitZ(), m, col + i * d, ld);
+        continue;
+      }
+      const Vec3 rij = x[i] - x[j];
+      const double r = rij.norm();
+      const Vec3 e = r > 0 ? Vec3(rij / r) : Vec3::UnitZ();
+      mobility::fill_pair_block(mobility::pair_scalars(a[i], a[j], r, mu, m), e, m, col + i * d, ld);
+    }
+  }
+  return M;
+}
+
 void mobility_product(const std::vector<Vec3>& x, const std::vector<double>& a, double mu, Moments m,
                       const VecX& in, VecX& out) {
   const int d = dof_per_particle(m);
@@ -60,7 +83,7 @@ void DirectFarField::set_configuration(const Configuration& c) {
 
 const MatX* DirectFarField::dense() const {
   if (!have_dense_) {
-    dense_ = dense_mobility(x_, a_, mu_, m_);
+    dense_ = assemble_mobility(x_, a_, mu_, m_);
     have_dense_ = true;
   }
   return &dense_;

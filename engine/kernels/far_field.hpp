@@ -2,8 +2,11 @@
 // Far-field grand mobility M_inf of N spheres in an open domain (direct summation), and the
 // free-draining (self-only) mobility.
 //
-// M_inf is assembled from the pair blocks of engine/kernels/mobility_pair.hpp. Two implementations:
+// M_inf is assembled from the pair blocks of engine/kernels/mobility_pair.hpp. Implementations:
 //   dense_mobility      - the reference: the full (dN x dN) matrix from the explicit tensors;
+//   assemble_mobility   - the same matrix from the closed-form blocks (fill_pair_block), written
+//                         in place, OpenMP over the block rows: the dense operator's fast path
+//                         (equal to dense_mobility to round-off, tests/test_sd_dense_fast.cpp);
 //   mobility_product    - matrix-free y = M x, O(N^2) work, OpenMP over the rows (each thread
 //                         owns the output rows of its particles, so there are no write conflicts
 //                         and the result does not depend on the thread count).
@@ -16,6 +19,8 @@
 namespace stokesian {
 
 MatX dense_mobility(const std::vector<Vec3>& x, const std::vector<double>& a, double mu, Moments m);
+
+MatX assemble_mobility(const std::vector<Vec3>& x, const std::vector<double>& a, double mu, Moments m);
 
 // y = M x (y is resized).
 void mobility_product(const std::vector<Vec3>& x, const std::vector<double>& a, double mu, Moments m,

@@ -241,6 +241,45 @@ void apply_self(double a, double mu, Moments m, const double* x, double* y) {
     for (int i = 6; i < 11; ++i) y[i] += s.xm * x[i];
 }
 
+void fill_pair_block(const PairScalars& s, const Vec3& e, Moments m, double* B, long ld) {
+  const int d = dof_per_particle(m);
+  auto at = [&](int r, int c) -> double& { return B[r + long(c) * ld]; };
+  for (int j = 0; j < 3; ++j)
+    for (int i = 0; i < 3; ++i) at(i, j) = (s.xa - s.ya) * e[i] * e[j] + (i == j ? s.ya : 0.0);
+  if (d == 3) return;
+  // eps_ijk e_k: the matrix of F -> F x e.
+  const double cx[3][3] = {{0.0, e[2], -e[1]}, {-e[2], 0.0, e[0]}, {e[1], -e[0], 0.0}};
+  for (int j = 0; j < 3; ++j)
+    for (int i = 0; i < 3; ++i) {
+      at(3 + i, j) = s.yb * cx[i][j];
+      at(i, 3 + j) = s.ybt * cx[i][j];
+      at(3 + i, 3 + j) = (s.xc - s.yc) * e[i] * e[j] + (i == j ? s.yc : 0.0);
+    }
+  if (d == 6) return;
+  const auto& basis = sym_traceless_basis();
+  Vec3 Pe[5];
+  double c[5];
+  for (int p = 0; p < 5; ++p) {
+    Pe[p] = basis[std::size_t(p)] * e;
+    c[p] = e.dot(Pe[p]);
+  }
+  for (int p = 0; p < 5; ++p) {
+    const Vec3 exPe = e.cross(Pe[p]);
+    for (int k = 0; k < 3; ++k) {
+      const double rad = 2.0 * Pe[p][k] - 2.0 * c[p] * e[k];
+      at(6 + p, k) = s.xg * c[p] * e[k] + s.yg * rad;
+      at(k, 6 + p) = s.xgt * c[p] * e[k] + s.ygt * rad;
+      at(6 + p, 3 + k) = 2.0 * s.yh * exPe[k];
+      at(3 + k, 6 + p) = 2.0 * s.yht * exPe[k];
+    }
+  }
+  for (int q = 0; q < 5; ++q)
+    for (int p = 0; p < 5; ++p) {
+      const double cc = c[p] * c[q], pq = Pe[p].dot(Pe[q]);
+      at(6 + p, 6 + q) = 1.5 * s.xm * cc + s.ym * (2.0 * pq - 2.0 * cc) + s.zm * ((p == q ? 1.0 : 0.0) - 2.0 * pq + 0.5 * cc);
+    }
+}
+
 MatX pair_block(const PairScalars& s, const Vec3& e, Moments m) {
   auto dl = [](int i, int j) { return i == j ? 1.0 : 0.0; };
   auto eps = [](int i, int j, int k) { return 0.5 * double((i - j) * (j - k) * (k - i)); };

@@ -71,6 +71,15 @@ void apply_pair(const PairScalars& s, const Vec3& e, Moments m, const double* x,
 // y_alpha += M^{alpha alpha} x_alpha.
 void apply_self(double a, double mu, Moments m, const double* x, double* y);
 
+// The same d x d block written straight into column-major storage B (leading dimension ld), from
+// closed forms of the contractions with the orthonormal basis P_p of engine/core/sym_traceless.hpp
+// (P_p symmetric traceless, P_p : P_q = delta_pq), with Pe_p = P_p e and c_p = e . P_p e:
+//   E_p <- F_k : xg c_p e_k + yg (2 (Pe_p)_k - 2 c_p e_k)        (U_k <- S_p: xgt, ygt alike)
+//   E_p <- T_k : 2 yh (e x Pe_p)_k                              (Omega_k <- S_p: yht alike)
+//   E_p <- S_q : 1.5 xm c_p c_q + ym (2 Pe_p.Pe_q - 2 c_p c_q) + zm (delta_pq - 2 Pe_p.Pe_q + c_p c_q / 2)
+// and the F/T blocks as in apply_pair. The fast path of the dense assembly; tested against pair_block.
+void fill_pair_block(const PairScalars& s, const Vec3& e, Moments m, double* B, long ld);
+
 // Dense d x d block from the explicit Cartesian tensors a_ij, b_ij, c_ij, g_ijk, h_ijk, m_ijkl
 // contracted with the symmetric-traceless basis. Reference path, independent of apply_pair.
 MatX pair_block(const PairScalars& s, const Vec3& e, Moments m);
