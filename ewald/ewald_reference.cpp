@@ -6,6 +6,7 @@
 #include "ewald/ewald_split.hpp"
 #include "ewald/lattice.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <stdexcept>
@@ -14,16 +15,10 @@ namespace stokesian::ewald {
 namespace {
 
 
-// M(i*d.., j*d..) += block of scalars s along e, built column by column with apply_pair.
-void add_block(MatX& M, long i, long j, const PairScalars& s, const Vec3& e, Moments m) {
-  const int d = dof_per_particle(m);
-  double x[11], y[11];
-  for (int c = 0; c < d; ++c) {
-    for (int q = 0; q < d; ++q) x[q] = y[q] = 0.0;
-    x[c] = 1.0;
-    mobility::apply_pair(s, e, m, x, y);
-    for (int q = 0; q < d; ++q) M(i * d + q, j * d + c) += y[q];
-  }
+// M(i*d.., j*d..) += B, B (d x d) column-major.
+void add_block(MatX& M, long i, long j, const double* B, int d) {
+  for (int c = 0; c < d; ++c)
+    for (int q = 0; q < d; ++q) M(i * d + q, j * d + c) += B[q + c * d];
 }
 
 // Bounds |n_i| for lattice points A n (or reciprocal B n) inside a ball of radius R:
@@ -50,7 +45,9 @@ MatX ewald_mobility(const std::vector<Vec3>& x, const std::vector<double>& a, do
   const auto nb = index_bounds(lat.Ainv, rmax + lat.A.norm());
 #pragma omp parallel for schedule(dynamic)
   for (long i = 0; i < (opt.real ? n : 0); ++i) {
+    double block[121], sum[121];  // one image's block and the image sum, d x d column-major
     for (long j = 0; j < n; ++j) {
+      std::fill(sum, sum + d * d, 0.0);
       const Vec3 r0 = lat.nearest_image(x[i] - x[j]);
       for (int p = -nb[0]; p <= nb[0]; ++p)
         for (int q = -nb[1]; q <= nb[1]; ++q)
@@ -59,10 +56,14 @@ MatX ewald_mobility(const std::vector<Vec3>& x, const std::vector<double>& a, do
             const double dist = r.norm();
             if (dist >= rmax || (i == j && dist == 0.0)) continue;
             // Coincident distinct centres give an isotropic block: any axis will do.
-            add_block(M, i, j, real_scalars(a[i], a[j], dist, xi, mu, m), dist > 0.0 ? Vec3(r / dist) : Vec3::UnitZ(), m);
+            mobility::fill_pair_block(real_scalars(a[i], a[j], dist, xi, mu, m),
+                                      dist > 0.0 ? Vec3(r / dist) : Vec3::UnitZ(), m, block, d);
+            for (int e = 0; e < d * d; ++e) sum[e] += block[e];
           }
+      add_block(M, i, j, sum, d);
     }
-    add_block(M, i, i, self_correction(a[i], xi, mu), Vec3::UnitZ(), m);
+    mobility::fill_pair_block(self_correction(a[i], xi, mu), Vec3::UnitZ(), m, block, d);
+    add_block(M, i, i, block, d);
   }
 
   // Wave space: half of the k-vectors (k and -k give complex-conjugate terms).
@@ -77,17 +78,30 @@ MatX ewald_mobility(const std::vector<Vec3>& x, const std::vector<double>& a, do
         const Vec3 k = lat.B * Vec3(p, q, t);
         if (k.norm() < kmax) ks.push_back(k);
       }
-  MatX W = MatX::Zero(n * d, n * d);
-  MatXc Z(n * d, 3);
-  for (const Vec3& k : ks) {
-    for (long i = 0; i < n; ++i)
-      Z.block(i * d, 0, d, 3) = fourier_response(k, a[i], m) * std::polar(1.0, k.dot(x[i]));
+  // Each wave vector adds Re(Z G Z^+) with Z the stacked responses R_i(k) e^{i k.x_i} (n d x 3)
+  // and G = c (I - k k^T / k^2), c = H(k) / (mu k^2) >= 0. With t1, t2 an orthonormal basis of the
+  // plane normal to k, G = Q Q^T for Q = sqrt(c) [t1 t2], so Re(Z G Z^+) = (Re Z Q)(Re Z Q)^T +
+  // (Im Z Q)(Im Z Q)^T: four real columns per wave vector, and the whole wave sum is the single
+  // product Y Y^T (one matrix product instead of one complex n d x n d update per wave vector).
+  const long K = long(ks.size());
+  MatX Y(n * d, 4 * K);
+#pragma omp parallel for schedule(static)
+  for (long w = 0; w < K; ++w) {
+    const Vec3& k = ks[std::size_t(w)];
     const double k2 = k.squaredNorm();
-    const Mat3 G = hasimoto(k2, xi) / (mu * k2) * (Mat3::Identity() - k * k.transpose() / k2);
-    const MatXc ZG = Z * G.cast<std::complex<double>>();
-    W.noalias() += (ZG * Z.adjoint()).real();
+    const double c = hasimoto(k2, xi) / (mu * k2);
+    const Vec3 kh = k / std::sqrt(k2);
+    const Vec3 t1 = kh.unitOrthogonal(), t2 = kh.cross(t1);
+    Eigen::Matrix<double, 3, 2> Q;
+    Q.col(0) = std::sqrt(c) * t1;
+    Q.col(1) = std::sqrt(c) * t2;
+    for (long i = 0; i < n; ++i) {
+      const MatXc Z = fourier_response(k, a[i], m) * std::polar(1.0, k.dot(x[i]));
+      Y.block(i * d, 4 * w, d, 2).noalias() = Z.real() * Q;
+      Y.block(i * d, 4 * w + 2, d, 2).noalias() = Z.imag() * Q;
+    }
   }
-  M += (2.0 / lat.volume) * W;
+  M.noalias() += (2.0 / lat.volume) * Y * Y.transpose();
   return M;
 }
 

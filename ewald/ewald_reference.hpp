@@ -10,7 +10,9 @@
 // neglected term is below exp(-tail^2) times a polynomial (tail = 7.5: < 1e-22), so the result is
 // converged to rounding and independent of xi (tested to 1e-13).
 // Cost: O(N^2 (images + wave vectors)) with about 2 * (4 pi / 3) (tail / (xi V^(1/3)))^3 of each;
-// meant for N up to a few hundred.
+// meant for N up to a few hundred. The real-space blocks use the closed forms of
+// mobility::fill_pair_block; the wave sum is one real matrix product Y Y^T with four columns per
+// wave vector (ewald_reference.cpp), so it runs at dense matrix-product speed.
 #include "engine/core/operators.hpp"
 #include "engine/core/types.hpp"
 

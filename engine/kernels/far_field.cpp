@@ -28,9 +28,15 @@ MatX dense_mobility(const std::vector<Vec3>& x, const std::vector<double>& a, do
 }
 
 MatX assemble_mobility(const std::vector<Vec3>& x, const std::vector<double>& a, double mu, Moments m) {
+  MatX M;
+  assemble_mobility(x, a, mu, m, M);
+  return M;
+}
+
+void assemble_mobility(const std::vector<Vec3>& x, const std::vector<double>& a, double mu, Moments m, MatX& M) {
   const int d = dof_per_particle(m);
   const long n = long(x.size()), ld = n * d;
-  MatX M(ld, ld);
+  M.resize(ld, ld);
   // Every block is computed (both orders of each pair), so the symmetry of M stays a property of
   // the formulas, as in dense_mobility.
 #pragma omp parallel for schedule(static)
@@ -47,7 +53,6 @@ MatX assemble_mobility(const std::vector<Vec3>& x, const std::vector<double>& a,
       mobility::fill_pair_block(mobility::pair_scalars(a[i], a[j], r, mu, m), e, m, col + i * d, ld);
     }
   }
-  return M;
 }
 
 void mobility_product(const std::vector<Vec3>& x, const std::vector<double>& a, double mu, Moments m,
@@ -83,7 +88,7 @@ void DirectFarField::set_configuration(const Configuration& c) {
 
 const MatX* DirectFarField::dense() const {
   if (!have_dense_) {
-    dense_ = assemble_mobility(x_, a_, mu_, m_);
+    assemble_mobility(x_, a_, mu_, m_, dense_);
     have_dense_ = true;
   }
   return &dense_;

@@ -21,6 +21,8 @@ namespace stokesian {
 MatX dense_mobility(const std::vector<Vec3>& x, const std::vector<double>& a, double mu, Moments m);
 
 MatX assemble_mobility(const std::vector<Vec3>& x, const std::vector<double>& a, double mu, Moments m);
+// In place: M is resized (its storage reused when the size is unchanged).
+void assemble_mobility(const std::vector<Vec3>& x, const std::vector<double>& a, double mu, Moments m, MatX& M);
 
 // y = M x (y is resized).
 void mobility_product(const std::vector<Vec3>& x, const std::vector<double>& a, double mu, Moments m,
