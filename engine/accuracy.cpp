@@ -5,7 +5,7 @@ namespace stokesian {
 namespace {
 // Safety factors measured with bench_asd's tolerance sweep (see engine/accuracy.hpp).
 constexpr double kFarFieldFactor = 0.1;
-constexpr double kKrylovFactor = 0.1;
+constexpr double kKrylovFactor = 0.02;
 }  // namespace
 
 AccuracyKnobs derive_knobs(double t, HydroModel level) {

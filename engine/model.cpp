@@ -48,10 +48,29 @@ std::string unusable(const SolverEntry& e, const Scene& s, bool brownian) {
   return "";
 }
 
+// `[hydrodynamics] solver = "auto"` picks dense SD up to these N and accelerated SD beyond, by
+// measured cost per deterministic FTS solve (bench_asd and bench_dense_sd, docs/accelerated_sd.md).
+constexpr std::size_t kAutoDenseUpToOpen = 300, kAutoDenseUpToPeriodic = 100;
+
+// The registered solver a `[hydrodynamics] solver` value names ("" for auto).
+std::string solver_named(const std::string& key) {
+  return key == "dense" ? "dense_sd" : key == "accelerated" ? "accelerated_sd" : "";
+}
+
 const SolverEntry* usable_solver(HydroModel level, const Scene& s, bool brownian, std::string* why) {
   std::string all;
+  const std::string named = level == HydroModel::stokesian ? solver_named(s.hydro.solver) : "";
+  const std::size_t n = s.positions.size(), dense_up_to = s.domain.periodic() ? kAutoDenseUpToPeriodic : kAutoDenseUpToOpen;
   for (const auto& e : hydro_solvers().entries()) {
     if (e.level != level) continue;
+    if (!named.empty() && e.name != named) continue;
+    // auto at the SD level: dense up to the crossover, accelerated beyond.
+    if (named.empty() && level == HydroModel::stokesian && !brownian &&
+        (e.name == "dense_sd") != (n <= dense_up_to)) {
+      all += (all.empty() ? "" : "; ") + e.name + ": not the cheaper one for N = " + std::to_string(n) +
+             " (dense up to " + std::to_string(dense_up_to) + ")";
+      continue;
+    }
     const std::string u = unusable(e, s, brownian);
     if (u.empty()) return &e;
     all += (all.empty() ? "" : "; ") + e.name + ": " + u;
@@ -158,6 +177,19 @@ ResolvedModel resolve_model(const Scene& s) {
     }
     m.solver = e->name;
     m.reasons.push_back("solver: " + e->name + " (" + e->description + ")");
+    if (m.level == HydroModel::stokesian) {
+      const std::size_t up_to = s.domain.periodic() ? kAutoDenseUpToPeriodic : kAutoDenseUpToOpen;
+      if (s.hydro.solver == "auto")
+        m.reasons.push_back("auto solver: N = " + std::to_string(n) + (n <= up_to ? " <= " : " > ") +
+                            std::to_string(up_to) + " -> " + e->name + " (the cheaper per solve in " +
+                            (s.domain.periodic() ? "periodic boxes" : "open domains") +
+                            ", bench_asd/bench_dense_sd; set solver = \"dense\" or \"accelerated\" to choose)");
+      else
+        m.reasons.push_back("solver set by scene: " + s.hydro.solver);
+    } else if (s.hydro.solver != "auto") {
+      m.reasons.push_back("note: solver = \"" + s.hydro.solver + "\" applies to the stokesian level only; the level here is " +
+                          name_of(m.level));
+    }
   }
 
   // Moments.

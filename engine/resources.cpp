@@ -142,8 +142,9 @@ ResourceEstimate estimate_resources(const Scene& s, const ResolvedModel& model) 
     } else if (model.far_field == "pme") {
       try {
         const ewald::Lattice lattice = ewald::Lattice::from_domain(s.domain);
+        const double ff_tol = derive_knobs(s.hydro.tolerance, model.level).far_field;  // as the run asks
         const ewald::PmeParameters p =
-            ewald::pme_parameters(s.hydro.tolerance, lattice, int(std::min(N, 2e9)), a_min, a_max, model.moments);
+            ewald::pme_parameters(ff_tol, lattice, int(std::min(N, 2e9)), a_min, a_max, model.moments);
         const double G = double(p.grid[0]) * p.grid[1] * p.grid[2];
         const double spectral = double(p.grid[0]) * p.grid[1] * (p.grid[2] / 2 + 1);
         Keys gk = model_keys;
@@ -152,7 +153,7 @@ ResourceEstimate estimate_resources(const Scene& s, const ResolvedModel& model) 
         e.components.push_back({"PME grid", 8.0 * d * G + 16.0 * d * spectral,
                                 "grid " + std::to_string(p.grid[0]) + " x " + std::to_string(p.grid[1]) + " x " +
                                     std::to_string(p.grid[2]) + " x " + std::to_string(d) +
-                                    " doubles and its spectrum, from tolerance " + num(s.hydro.tolerance),
+                                    " doubles and its spectrum, from far-field tolerance " + num(ff_tol),
                                 gk});
         const double P = p.support;
         const double pairs = N * neighbours(N, rho, p.cutoff_gap + 2 * a_max) / 2;

@@ -32,9 +32,9 @@ VecX self_resistance(const std::vector<double>& a, double mu, Moments m) {
 
 AcceleratedStokesianDynamics::AcceleratedStokesianDynamics(std::unique_ptr<MobilityOperator> far_field, double mu,
                                                            lubrication::NearFieldParams p, double krylov_tolerance,
-                                                           double shift, Method method)
+                                                           double shift, Method method, double factor_gap)
     : m_(far_field->moments()), mu_(mu), op_(std::move(far_field)), near_(m_, mu, p), tol_(krylov_tolerance),
-      shift_(shift), method_(method) {}
+      shift_(shift), factor_gap_(factor_gap), method_(method) {}
 
 void AcceleratedStokesianDynamics::prepare(const Configuration& c) {
   auto t0 = std::chrono::steady_clock::now();
@@ -63,23 +63,36 @@ void AcceleratedStokesianDynamics::factorise(const std::vector<long>& v) {
   for (std::size_t i = 0; i < v.size(); ++i) pos[std::size_t(v[i])] = int(i);
   std::vector<Eigen::Triplet<double, int>> t;
   t.reserve(std::size_t(Rnf_.nonZeros()) / 2 + v.size());
+  const int d = dof_per_particle(m_);
   for (int col = 0; col < Rnf_.outerSize(); ++col) {
     const int cj = pos[std::size_t(col)];
     if (cj < 0) continue;
+    const long q = col / d;
+    long last = -1;
+    bool strong = true;
     for (lubrication::SparseMatrix::InnerIterator it(Rnf_, col); it; ++it) {
       const int ri = pos[std::size_t(it.row())];
-      if (ri >= 0 && ri <= cj) t.emplace_back(ri, cj, it.value());
+      if (ri < 0 || ri > cj) continue;
+      const long p = it.row() / d;
+      if (p != last) {  // entries come in blocks of one particle p
+        last = p;
+        strong = true;
+        if (p != q && factor_gap_ < 1e300) {
+          const double r = config_.domain.minimum_image(config_.x[std::size_t(p)] - config_.x[std::size_t(q)]).norm();
+          strong = 2.0 * r / (config_.a[std::size_t(p)] + config_.a[std::size_t(q)]) - 2.0 < factor_gap_;
+        }
+      }
+      if (strong) t.emplace_back(ri, cj, it.value());
     }
   }
   for (std::size_t i = 0; i < v.size(); ++i) t.emplace_back(int(i), int(i), shift_ * D_[v[i]]);
-  lubrication::SparseMatrix Rt(long(v.size()), long(v.size()));
-  Rt.setFromTriplets(t.begin(), t.end());
+  Rt_.resize(long(v.size()), long(v.size()));
+  Rt_.setFromTriplets(t.begin(), t.end());
   try {
-    factor_.factorize(Rt);
+    factor_.factorize(Rt_);
   } catch (const NotPositiveDefinite& e) {
     // R_nf is a sum of positive semi-definite pair blocks, so R_nf + B fails only with a pair
     // block that is not: name the particle of the failing entry and its closest neighbour.
-    const int d = dof_per_particle(m_);
     const long p = e.column >= 0 && e.column < long(v.size()) ? v[std::size_t(e.column)] / d : -1;
     std::ostringstream o;
     o << "accelerated SD: the near-field resistance plus shift is not positive definite (" << e.what() << ")";
@@ -117,8 +130,14 @@ HydroResult AcceleratedStokesianDynamics::solve(const HydroProblem& p) {
     const long e = v[std::size_t(i)];
     g[i] = c.force[e] - RVk[e] + (p.force_noise ? (*p.force_noise)[e] : 0.0);
   }
-  VecX Bv(nv);
-  for (long i = 0; i < nv; ++i) Bv[i] = shift_ * D_[v[std::size_t(i)]];
+  // C z = R~ z - R_vv z for z on the v entries (zero elsewhere); the result on the v entries.
+  VecX zv(nv), Cz;
+  auto applyC = [&](const VecX& z, VecX& out) {
+    for (long i = 0; i < nv; ++i) zv[i] = z[v[std::size_t(i)]];
+    const VecX Rz = Rnf_ * z;
+    out = Rt_.selfadjointView<Eigen::Upper>() * zv;
+    for (long i = 0; i < nv; ++i) out[i] -= Rz[v[std::size_t(i)]];
+  };
   // Q z: R~^{-1} on the v entries, zero elsewhere.
   auto applyQ = [&](const VecX& z, VecX& out) {
     VecX zv(nv);
@@ -129,22 +148,24 @@ HydroResult AcceleratedStokesianDynamics::solve(const HydroProblem& p) {
   };
   int products = 0;
   VecX Mz, y, t, q;
-  // Right-hand side D [ (I - M B^) Q g~ + P_k V_k - u_s ].
+  // Right-hand side D [ (I - M C^) Q g~ + P_k V_k - u_s ].
   VecX gfull = VecX::Zero(n);
   for (long i = 0; i < nv; ++i) gfull[v[std::size_t(i)]] = g[i];
   applyQ(gfull, y);
   t = VecX::Zero(n);
-  for (long i = 0; i < nv; ++i) t[v[std::size_t(i)]] = Bv[i] * y[v[std::size_t(i)]];
+  applyC(y, Cz);
+  for (long i = 0; i < nv; ++i) t[v[std::size_t(i)]] = Cz[i];
   op_->apply(t, Mz);
   ++products;
   VecX b = y - Mz + c.motion;
   if (p.slip) b -= *p.slip;
   b = D_.cwiseProduct(b);
-  // Operator W -> D [ M (W - B^ Q W) + Q W ].
+  // Operator W -> D [ M (W - C^ Q W) + Q W ].
   const LinearOperator A = [&](const VecX& W, VecX& out) {
     applyQ(W, q);
+    applyC(q, Cz);
     t = W;
-    for (long i = 0; i < nv; ++i) t[v[std::size_t(i)]] -= Bv[i] * q[v[std::size_t(i)]];
+    for (long i = 0; i < nv; ++i) t[v[std::size_t(i)]] -= Cz[i];
     op_->apply(t, out);
     out += q;
     out.array() *= D_.array();
@@ -167,14 +188,17 @@ HydroResult AcceleratedStokesianDynamics::solve(const HydroProblem& p) {
         << near_stats_.min_xi;
     throw PhysicsError(o.str());
   }
-  // V_v = R~^{-1}(g - W_v); X = W + B^ V; F = X + R_nf V.
+  // V_v = R~^{-1}(g - W_v); X = W + C^ V; F = X + R_nf V.
   VecX rv(nv);
   for (long i = 0; i < nv; ++i) rv[i] = g[i] - W[v[std::size_t(i)]];
   const VecX Vv = nv > 0 ? factor_.solve(rv) : VecX();
   VecX V = c.motion, X = W;
-  for (long i = 0; i < nv; ++i) {
-    V[v[std::size_t(i)]] = Vv[i];
-    X[v[std::size_t(i)]] += Bv[i] * Vv[i];
+  for (long i = 0; i < nv; ++i) V[v[std::size_t(i)]] = Vv[i];
+  {
+    VecX Vonly = VecX::Zero(n);
+    for (long i = 0; i < nv; ++i) Vonly[v[std::size_t(i)]] = Vv[i];
+    applyC(Vonly, Cz);
+    for (long i = 0; i < nv; ++i) X[v[std::size_t(i)]] += Cz[i];
   }
   const VecX F = X + Rnf_ * V;
   HydroResult res = unpack_solution(m_, p.flow, V, F, p.fixed);

@@ -13,12 +13,20 @@
 // factorised once per configuration by CHOLMOD), and W = X - P_v B V_v, the second condition is
 // V_v = R~^{-1} (g - W_v) and the first becomes, with Q = P_v R~^{-1} P_v^T and B^ = P_v B P_v^T,
 //     [ M_inf (I - B^ Q) + Q ] W = (I - M_inf B^) Q g~ + P_k V_k - u_s            (eq. 2.47)
-// An exact change of variables: V does not depend on B (tested); B only conditions the system.
-// We take B = D_v, D the diagonal of the self resistance (6 pi mu a, 8 pi mu a^3, 20 pi mu a^3/3
-// per translational, rotational, stresslet component), and scale the rows by D: with
-// M_inf ~ D^{-1} (no interactions) and no given motion the operator is D (I + M R_nf)(R_nf + D)^{-1}
-// = I exactly, so its eigenvalues cluster at 1 and the far-field interactions alone set the
-// iteration count. Each iteration costs one far-field product and one pair of triangular solves.
+// An exact change of variables for ANY symmetric C = R~ - R_vv that leaves R~ positive definite
+// (the derivation never uses that C is diagonal, only that R~ is what is factorised): V does not
+// depend on C (tested); C only conditions the system and sets the cost of the factorisation.
+// We factorise R~ = R_vv with the off-diagonal blocks of "weak" pairs dropped + B, B = shift D_v,
+// D the diagonal of the self resistance (6 pi mu a, 8 pi mu a^3, 20 pi mu a^3/3 per
+// translational, rotational, stresslet component); a pair is weak when its symmetric gap is at
+// least `factor_gap` (its lubrication is not singular there). Dropping those blocks keeps R~
+// positive definite (each pair block is PSD, and so is its block diagonal) and bounds the fill of
+// the factor, which otherwise grows like N^1.5 at phi >= 0.3 (bench_asd, "fill"); the dropped part
+// stays in the exact operator through C = B - R_weak,offdiag. The rows are scaled by D: with
+// M_inf ~ D^{-1} (no interactions), no given motion and nothing dropped the operator is
+// D (I + M R_nf)(R_nf + D)^{-1} = I exactly, so its eigenvalues cluster at 1 and the far-field
+// interactions set the iteration count. Each iteration costs one far-field product, one pair of
+// triangular solves and two sparse products.
 // Afterwards V_v = R~^{-1}(g - W_v), X = W + B^ V, and the moments are F = X + R_nf V (the given
 // force plus noise at v by construction, the stresslets and holding forces at k).
 //
@@ -50,9 +58,16 @@ class AcceleratedStokesianDynamics final : public HydroSolver {
   enum class Method { gmres, bicgstab };
   // krylov_tolerance: relative residual of the row-scaled system (engine/accuracy.hpp);
   // shift: B = shift * D (any positive value gives the same answer).
+  // factor_gap: pairs with a symmetric gap at or above it keep only their diagonal blocks in R~.
   AcceleratedStokesianDynamics(std::unique_ptr<MobilityOperator> far_field, double mu,
-                               lubrication::NearFieldParams p, double krylov_tolerance, double shift = 1.0,
-                               Method method = Method::gmres);
+                               lubrication::NearFieldParams p, double krylov_tolerance, double shift = kShift,
+                               Method method = Method::gmres, double factor_gap = kFactorGap);
+  // Measured with bench_asd ("krylov", periodic FTS, N = 500, tolerance 1e-4; docs/accelerated_sd.md):
+  // at phi = 0.45 the shift 0.3 / 1 / 3 / 10 takes 31 / 27 / 24 / 26 iterations with factor_gap 0.1,
+  // and factor_gap all / 0.5 / 0.1 / 0.02 takes 25 / 25 / 24 / 31 iterations at shift 3 with factor
+  // fill 2.28e6 / 8.0e5 / 5.1e4 / 1.5e4 nonzeros; at phi = 0.3 shift 3 with 0.1: 18 iterations.
+  static constexpr double kShift = 3.0;
+  static constexpr double kFactorGap = 0.1;
 
   const char* name() const override { return "accelerated_sd"; }
   Moments moments() const override { return m_; }
@@ -74,7 +89,8 @@ class AcceleratedStokesianDynamics final : public HydroSolver {
   double mu_;
   std::unique_ptr<MobilityOperator> op_;
   lubrication::NearField near_;
-  double tol_, shift_;
+  double tol_, shift_, factor_gap_;
+  lubrication::SparseMatrix Rt_;  // R~ (upper triangle), the factorised matrix
   Method method_;
   StoredConfiguration config_;
   lubrication::SparseMatrix Rnf_;
