@@ -48,7 +48,7 @@ Simulation::Simulation(Scene scene)
       model_(resolve_model(scene_)),
       strain_rate_(lattice_strain_rate(scene_.flow, scene_.domain)),
       hydro_(model_, scene_.fluid.viscosity, ambient_flow(scene_.flow), scene_.hydro.tolerance,
-             {scene_.hydro.lubrication_cutoff, scene_.hydro.lubrication_min_gap}),
+             lubrication::near_field_params(scene_.hydro, model_.moments)),
       integrator_(integrators().find(model_.integrator)->make(scene_.time)),
       observers_(make_observers(scene_, model_)) {}
 

@@ -691,13 +691,37 @@ Scene parse_scene(const toml::table& root, const std::string& source) {
     R.fail(&flow, "[flow] rate", "required when kind is not \"none\"");
 
   const toml::table& hy = sub(R, root, "hydrodynamics");
-  R.only(hy, "hydrodynamics", {"model", "moments", "far_field", "tolerance", "lubrication_cutoff", "lubrication_min_gap"});
+  R.only(hy, "hydrodynamics", {"model", "moments", "far_field", "tolerance", "lubrication_cutoff",
+                                 "lubrication_taper", "lubrication_min_gap"});
   s.hydro.model = R.name(hy, "hydrodynamics", "model", HydroModel::auto_);
   s.hydro.moments = R.name(hy, "hydrodynamics", "moments", MomentChoice::auto_);
   // A registered method or "auto": checked against the registry by model resolution.
   s.hydro.far_field = R.string(hy, "hydrodynamics", "far_field", s.hydro.far_field);
   s.hydro.tolerance = R.number(hy, "hydrodynamics", "tolerance", 1e-6, 1e-14, 0.1);
-  s.hydro.lubrication_cutoff = R.number(hy, "hydrodynamics", "lubrication_cutoff", 4.0, 2.0, 100.0, true);
+  // lubrication_cutoff, lubrication_taper: "auto" or a number (docs/scene.md; resolved by
+  // lubrication::near_field_params). A taper must leave s_in = cutoff - taper >= 2.
+  auto is_auto = [&](const char* key, bool def) {
+    const toml::node* n = R.get(hy, "hydrodynamics", key);
+    if (!n || !n->is_string()) return n ? false : def;
+    if (n->value_exact<std::string>() != "auto")
+      R.fail(n, std::string("[hydrodynamics] ") + key,
+             "\"" + *n->value_exact<std::string>() + "\" is not \"auto\" or a number (allowed: \"auto\" or " +
+                 (std::string(key) == "lubrication_cutoff" ? "a number in (2, 100])" : "a number in [0, 98])"));
+    return true;
+  };
+  s.hydro.lubrication_cutoff_auto = is_auto("lubrication_cutoff", HydroParams{}.lubrication_cutoff_auto);
+  if (!s.hydro.lubrication_cutoff_auto)
+    s.hydro.lubrication_cutoff = R.number(hy, "hydrodynamics", "lubrication_cutoff", 4.0, 2.0, 100.0, true);
+  s.hydro.lubrication_taper_auto = is_auto("lubrication_taper", true);
+  if (!s.hydro.lubrication_taper_auto) {
+    s.hydro.lubrication_taper = R.number(hy, "hydrodynamics", "lubrication_taper", 0.0, 0.0, 98.0);
+    if (!s.hydro.lubrication_cutoff_auto && s.hydro.lubrication_taper > s.hydro.lubrication_cutoff - 2.0) {
+      std::ostringstream o;
+      o << "value " << s.hydro.lubrication_taper << " out of range (allowed [0, " << s.hydro.lubrication_cutoff - 2.0
+        << "]: the band [lubrication_cutoff - lubrication_taper, lubrication_cutoff] must start at 2 or above)";
+      R.fail(R.get(hy, "hydrodynamics", "lubrication_taper"), "[hydrodynamics] lubrication_taper", o.str());
+    }
+  }
   s.hydro.lubrication_min_gap = R.number(hy, "hydrodynamics", "lubrication_min_gap", 1e-6, 1e-8, 0.1);
 
   const toml::table& br = sub(R, root, "brownian");
@@ -819,12 +843,16 @@ std::string resolved_toml(const Scene& s) {
   if (!pair.empty()) forces.insert("pair", pair);
   root.insert("forces", forces);
   root.insert("flow", toml::table{{"kind", name_of(s.flow.kind)}, {"rate", s.flow.rate}});
-  root.insert("hydrodynamics", toml::table{{"model", name_of(s.hydro.model)},
-                                           {"moments", name_of(s.hydro.moments)},
-                                           {"far_field", s.hydro.far_field},
-                                           {"tolerance", s.hydro.tolerance},
-                                           {"lubrication_cutoff", s.hydro.lubrication_cutoff},
-                                           {"lubrication_min_gap", s.hydro.lubrication_min_gap}});
+  toml::table hydro{{"model", name_of(s.hydro.model)},
+                    {"moments", name_of(s.hydro.moments)},
+                    {"far_field", s.hydro.far_field},
+                    {"tolerance", s.hydro.tolerance},
+                    {"lubrication_min_gap", s.hydro.lubrication_min_gap}};
+  if (s.hydro.lubrication_cutoff_auto) hydro.insert("lubrication_cutoff", "auto");
+  else hydro.insert("lubrication_cutoff", s.hydro.lubrication_cutoff);
+  if (s.hydro.lubrication_taper_auto) hydro.insert("lubrication_taper", "auto");
+  else hydro.insert("lubrication_taper", s.hydro.lubrication_taper);
+  root.insert("hydrodynamics", hydro);
   root.insert("brownian", toml::table{{"seed", int64_t(s.seed)}});
   root.insert("run", toml::table{{"max_overlap", s.run.max_overlap}});
   root.insert("time", toml::table{{"dt", s.time.dt},

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <stdexcept>
 
 #include "engine/core/errors.hpp"
 
@@ -24,7 +25,28 @@ std::vector<int> level_indices(Moments m) {
 }
 }  // namespace
 
-NearField::NearField(Moments m, double mu, NearFieldParams p) : m_(m), mu_(mu), p_(p) {}
+NearField::NearField(Moments m, double mu, NearFieldParams p) : m_(m), mu_(mu), p_(p) {
+  if (!(p.cutoff > 2.0) || !(p.taper >= 0.0) || !(p.cutoff - p.taper >= 2.0) || !(p.min_gap > 0.0))
+    throw std::invalid_argument("NearField: need cutoff > 2, 0 <= taper <= cutoff - 2, min_gap > 0");
+}
+
+NearFieldParams near_field_params(const HydroParams& h, Moments moments, double max_cutoff) {
+  NearFieldParams p;
+  p.min_gap = h.lubrication_min_gap;
+  if (h.lubrication_cutoff_auto) {
+    const CutoffBand b = cutoff_for_tolerance(h.tolerance, moments, max_cutoff);
+    p.cutoff = b.s_cut;
+    p.taper = b.s_cut - b.s_in;
+    if (!h.lubrication_taper_auto) {  // the tolerance fixes s_in; the taper only widens the band
+      p.taper = h.lubrication_taper;
+      p.cutoff = b.s_in + h.lubrication_taper;
+    }
+  } else {
+    p.cutoff = h.lubrication_cutoff;
+    p.taper = h.lubrication_taper_auto ? 0.0 : h.lubrication_taper;
+  }
+  return p;
+}
 
 MatX NearField::exact_pair(const Vec3& r_vec, double ai, double aj) const {
   ResistanceScalars s12, s21;
@@ -64,9 +86,11 @@ SparseMatrix NearField::assemble(const std::vector<Vec3>& x, const std::vector<d
   for (long k = 0; k < long(pairs.size()); ++k) {
     const auto& p = pairs[std::size_t(k)];
     const double ai = a[std::size_t(p.i)], aj = a[std::size_t(p.j)];
-    if (2.0 * p.dist / (ai + aj) >= p_.cutoff) continue;
-    inside[std::size_t(k)] = 1;
+    const double s = 2.0 * p.dist / (ai + aj), w = weight(s);
+    if (!(w > 0.0)) continue;
+    inside[std::size_t(k)] = w < 1.0 ? 2 : 1;
     blocks[std::size_t(k)] = pair_block(-p.r, ai, aj);  // r_vec = x_j - x_i
+    if (w < 1.0) blocks[std::size_t(k)] *= w;
   }
   std::vector<Eigen::Triplet<double>> trip;
   trip.reserve(pairs.size() * std::size_t(4 * d * d));
@@ -75,6 +99,7 @@ SparseMatrix NearField::assemble(const std::vector<Vec3>& x, const std::vector<d
     const auto& p = pairs[k];
     const double xi = 2.0 * p.dist / (a[std::size_t(p.i)] + a[std::size_t(p.j)]) - 2.0;
     ++st.pairs;
+    st.tapered += inside[k] == 2;
     st.regularised += xi < p_.min_gap;
     st.overlaps += xi < 0;
     if (xi < st.min_xi) {
@@ -132,8 +157,9 @@ MatX NearField::assemble_dense(const std::vector<Vec3>& x, const std::vector<dou
     for (long j = i + 1; j < n; ++j) {
       const Vec3 rv = x[std::size_t(j)] - x[std::size_t(i)];
       const double ai = a[std::size_t(i)], aj = a[std::size_t(j)];
-      if (2.0 * rv.norm() / (ai + aj) >= p_.cutoff) continue;
-      const MatX B = pair_block(rv, ai, aj);
+      const double w = weight(2.0 * rv.norm() / (ai + aj));
+      if (!(w > 0.0)) continue;
+      const MatX B = w * pair_block(rv, ai, aj);
       R.block(i * d, i * d, d, d) += B.topLeftCorner(d, d);
       R.block(i * d, j * d, d, d) += B.topRightCorner(d, d);
       R.block(j * d, i * d, d, d) += B.bottomLeftCorner(d, d);

@@ -1,8 +1,10 @@
 #pragma once
 // Near-field (lubrication) resistance of Stokesian dynamics (docs/stokesian_dynamics.md):
 //
-//     R_nf = sum over pairs with s < s_cut of  [ R2B_exact(pair) - R2B_inf(pair) ],
+//     R_nf = sum over pairs with s < s_cut of  w(s) [ R2B_exact(pair) - R2B_inf(pair) ],
 //
+// w(s): the switch of lubrication/cutoff.hpp, 1 for s <= s_in = cutoff - taper, 0 from s_cut = cutoff
+// on, C2 in between (taper = 0: the hard step of published SD);
 // R2B_exact: the exact two-sphere resistance at the solve's moment level (F, FT or the full FTS
 //   matrix of lubrication/resistance_functions.hpp; F and FT are principal sub-blocks of FTS,
 //   since with E_inf = 0 the stresslet does not enter the force/torque rows);
@@ -16,6 +18,7 @@
 #include "engine/core/scene.hpp"
 #include "engine/core/types.hpp"
 #include "lubrication/cholmod_factor.hpp"
+#include "lubrication/cutoff.hpp"
 #include "lubrication/resistance_table.hpp"
 
 #include <vector>
@@ -23,12 +26,22 @@
 namespace stokesian::lubrication {
 
 struct NearFieldParams {
-  double cutoff = kDefaultLubricationCutoff;   // pairs with 2 r / (a_i + a_j) < cutoff [1]
+  double cutoff = kDefaultLubricationCutoff;   // s_cut: pairs with 2 r / (a_i + a_j) < cutoff [1]
   double min_gap = kDefaultLubricationMinGap;  // regularised minimum symmetric gap xi_min [1]
+  double taper = 0.0;  // width of the switch band [cutoff - taper, cutoff] [1]; 0 = hard step (published SD)
+  CutoffBand band() const { return {cutoff - taper, cutoff}; }
 };
+
+/// The near-field parameters of a scene: the one place where [hydrodynamics] lubrication_cutoff,
+/// lubrication_taper and lubrication_min_gap become NearFieldParams.  "auto" cutoff: the band of
+/// cutoff_for_tolerance(h.tolerance, moments, max_cutoff) (an explicit taper replaces its width);
+/// explicit cutoff: that s_cut with the explicit taper, or none ("auto" taper: hard step).
+/// `moments` is the resolved moment level of the solve.
+NearFieldParams near_field_params(const HydroParams& h, Moments moments, double max_cutoff = kDefaultMaxAutoCutoff);
 
 struct NearFieldStats {
   long pairs = 0;                 // pairs inside the cutoff
+  long tapered = 0;               // of those, pairs in the switch band (0 < w < 1)
   long regularised = 0;           // pairs evaluated at xi_min (including overlaps)
   long overlaps = 0;              // pairs with xi < 0
   double min_xi = 1e300;          // smallest symmetric gap seen
@@ -46,8 +59,10 @@ class NearField {
   MatX assemble_dense(const std::vector<Vec3>& x, const std::vector<double>& a) const;
 
   // The 2d x 2d pair block R2B_exact - R2B_inf for sphere i at the origin and sphere j at
-  // r_ij = x_i - x_j... expressed as r_vec = x_j - x_i (pair order i, j).
+  // r_vec = x_j - x_i (pair order i, j), without the switch w(s).
   MatX pair_block(const Vec3& r_vec, double ai, double aj) const;
+  // The switch w(s) of this near field at symmetric separation s = 2 r / (a_i + a_j).
+  double weight(double s) const { return cutoff_weight(s, p_.band()); }
   // The exact two-sphere resistance at the solve's moment level (2d x 2d).
   MatX exact_pair(const Vec3& r_vec, double ai, double aj) const;
 

@@ -174,6 +174,7 @@ Path settle_three(const char* moments) {
   toml << "[particles]\npositions = [[-5, 0, 0], [0, 0, 0], [7, 0, 0]]\n"
        << "[forces]\nexternal_force = [0.0, 0.0, -1.0]\n"
        << "[hydrodynamics]\nmodel = \"stokesian\"\nmoments = \"" << moments << "\"\n"
+       << "lubrication_cutoff = 4\nlubrication_taper = 0\n"  // published SD: hard step at s = 4
        << "[time]\ndt = 1.0\nsteps = 100000\nintegrator = \"rkf45\"\nrkf_tolerance = 1e-7\n";
   Simulation sim(io::parse_scene(toml.str(), "dbb87_fig5.toml"));
   State s = sim.initial_state();

@@ -94,8 +94,10 @@ struct Names<MomentChoice> {
       {{MomentChoice::auto_, "auto"}, {MomentChoice::F, "F"}, {MomentChoice::FT, "FT"}, {MomentChoice::FTS, "FTS"}}};
 };
 
-// Near field: pairs with 2r/(a_i+a_j) below the cutoff get lubrication; gaps are floored at the
-// minimum symmetric gap (lubrication/near_field.hpp uses the same defaults).
+// Near field: pairs with s = 2r/(a_i+a_j) below the cutoff get lubrication, switched off smoothly over
+// a band [s_in, s_cut] (lubrication/cutoff.hpp); gaps are floored at the minimum symmetric gap
+// (lubrication/near_field.hpp uses the same defaults). The explicit default 4 with no taper is
+// published SD; lubrication::near_field_params() resolves "auto".
 constexpr double kDefaultLubricationCutoff = 4.0, kDefaultLubricationMinGap = 1e-6;
 
 struct HydroParams {
@@ -103,7 +105,15 @@ struct HydroParams {
   MomentChoice moments = MomentChoice::auto_;
   std::string far_field = "auto";  // a registered far-field method (engine/methods.cpp) or "auto"
   double tolerance = 1e-6;  // relative accuracy of far-field products and iterative solves
-  double lubrication_cutoff = kDefaultLubricationCutoff;   // near field for pairs with 2r/(a_i+a_j) below this [1]
+  // lubrication_cutoff = "auto": the band from `tolerance` (lubrication::cutoff_for_tolerance); a number
+  // (default 4): that s_cut, with the band [s_cut - lubrication_taper, s_cut]. The default is the
+  // published one so that scenes and stored runs of earlier versions keep their meaning.
+  bool lubrication_cutoff_auto = false;
+  double lubrication_cutoff = kDefaultLubricationCutoff;   // explicit s_cut (not auto): no near field from 2r/(a_i+a_j) = this on [1]
+  // lubrication_taper = "auto" (default): 0.5 with an automatic cutoff, 0 (hard step, published SD)
+  // with an explicit one; a number: the band's width s_cut - s_in [1].
+  bool lubrication_taper_auto = true;
+  double lubrication_taper = 0.0;
   double lubrication_min_gap = kDefaultLubricationMinGap;  // regularised minimum symmetric gap xi = 2r/(a_i+a_j) - 2 [1]
 };
 
