@@ -192,11 +192,20 @@ HydroResult DenseStokesianDynamics::solve(const HydroProblem& p) {
   }
   const long nv = long(v.size());
   if (!have_Rvv_ || v != v_) {
-    Rvv_.resize(nv, nv);
-    for (long j = 0; j < nv; ++j) {
-      const long q = pos_[std::size_t(v[std::size_t(j)])] - n0_;
-      if (q < 0) throw std::logic_error("dense SD: an entry with given force outside the force/torque block");
-      for (long i = 0; i < nv; ++i) Rvv_(i, j) = Rtt_(pos_[std::size_t(v[std::size_t(i)])] - n0_, q);
+    std::vector<long> rows(std::size_t(nv), 0);  // row of each v entry in R_tt
+    bool whole = nv == Rtt_.rows();
+    for (long i = 0; i < nv; ++i) {
+      rows[std::size_t(i)] = pos_[std::size_t(v[std::size_t(i)])] - n0_;
+      if (rows[std::size_t(i)] < 0) throw std::logic_error("dense SD: an entry with given force outside the force/torque block");
+      whole = whole && rows[std::size_t(i)] == i;
+    }
+    if (whole) {
+      Rvv_ = Rtt_;  // no fixed particles: v is the whole force/torque block, in order
+    } else {
+      Rvv_.resize(nv, nv);
+#pragma omp parallel for schedule(static)
+      for (long j = 0; j < nv; ++j)
+        for (long i = 0; i < nv; ++i) Rvv_(i, j) = Rtt_(rows[std::size_t(i)], rows[std::size_t(j)]);
     }
     const VecX diagonal = Rvv_.diagonal();
     have_Rvv_ = false;
@@ -214,12 +223,13 @@ HydroResult DenseStokesianDynamics::solve(const HydroProblem& p) {
     v_ = v;
     have_Rvv_ = true;
   }
-  // R_vk V_k: the given motion (zero at v) through M_inf^{-1} and the near field.
-  const VecX given = apply_inverse_mobility(c.motion) + Rnf_ * c.motion;
+  // R_vk V_k: the given motion (zero at v) through M_inf^{-1} and the near field (nothing to do
+  // when every given motion is zero: no ambient flow).
   VecX V(nv);
-  for (long i = 0; i < nv; ++i) {
-    const long q = v[std::size_t(i)];
-    V[i] = c.force[q] + noise[q] - given[q];
+  for (long i = 0; i < nv; ++i) V[i] = c.force[v[std::size_t(i)]] + noise[v[std::size_t(i)]];
+  if (!c.motion.isZero(0.0)) {
+    const VecX given = apply_inverse_mobility(c.motion) + Rnf_ * c.motion;
+    for (long i = 0; i < nv; ++i) V[i] -= given[v[std::size_t(i)]];
   }
   lapack::potrs(Rvv_, V);
   VecX gen = c.motion;  // full generalised motion [U - u_inf, Omega - Omega_inf, -E_inf]

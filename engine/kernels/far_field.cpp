@@ -37,20 +37,22 @@ void assemble_mobility(const std::vector<Vec3>& x, const std::vector<double>& a,
   const int d = dof_per_particle(m);
   const long n = long(x.size()), ld = n * d;
   M.resize(ld, ld);
-  // Every block is computed (both orders of each pair), so the symmetry of M stays a property of
-  // the formulas, as in dense_mobility.
-#pragma omp parallel for schedule(static)
+  // Block (i, j) for i >= j from the formulas; block (j, i) is its transpose (M is symmetric:
+  // the pair scalars are symmetric under exchanging the particles with e -> -e; the explicit
+  // reference dense_mobility computes both orders independently, tests/test_sd_dense_fast.cpp).
+#pragma omp parallel for schedule(dynamic, 8)
   for (long j = 0; j < n; ++j) {  // block column j: contiguous storage
     double* col = M.data() + j * d * ld;
-    for (long i = 0; i < n; ++i) {
-      if (i == j) {
-        mobility::fill_pair_block(mobility::self_scalars(a[i], mu), Vec3::UnitZ(), m, col + i * d, ld);
-        continue;
-      }
+    mobility::fill_pair_block(mobility::self_scalars(a[j], mu), Vec3::UnitZ(), m, col + j * d, ld);
+    for (long i = j + 1; i < n; ++i) {
       const Vec3 rij = x[i] - x[j];
       const double r = rij.norm();
       const Vec3 e = r > 0 ? Vec3(rij / r) : Vec3::UnitZ();
-      mobility::fill_pair_block(mobility::pair_scalars(a[i], a[j], r, mu, m), e, m, col + i * d, ld);
+      double* B = col + i * d;
+      mobility::fill_pair_block(mobility::pair_scalars(a[i], a[j], r, mu, m), e, m, B, ld);
+      double* T = M.data() + i * d * ld + j * d;  // block (j, i)
+      for (int q = 0; q < d; ++q)
+        for (int p = 0; p < d; ++p) T[p + q * ld] = B[q + p * ld];
     }
   }
 }
