@@ -365,3 +365,31 @@ TEST_CASE("scene keys: lubrication_cutoff and lubrication_taper accept \"auto\" 
   CHECK(r.status == 2);
   CHECK(contains(r.err, "bad.toml:4: [hydrodynamics] lubrication_cutoff: value 1.5 out of range (allowed (2, 100])"));
 }
+
+// The measurement behind the fit of lubrication/cutoff.hpp (docs/lubrication.md section 7): the
+// two-sphere error of the far field alone, worst over 49 size ratios in [1, 16] (geometric) and
+// 20, 50, 100 (lambda and 1/lambda give the same error), printed per s; checks the fit bounds it.
+// Skipped by default (~15 s): ./tests/test_lubrication_cutoff --no-skip -tc="*far-field error scan*"
+TEST_CASE("far-field error scan: the fit e(s) <= A s^-p holds for s in [4, 60]" * doctest::skip()) {
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(1);
+  std::vector<double> lams;
+  for (int k = 0; k <= 48; ++k) lams.push_back(std::pow(16.0, k / 48.0));
+  for (double l : {20.0, 50.0, 100.0}) lams.push_back(l);
+  const double ss[] = {4.0, 4.25, 4.5, 5.0, 5.5, 6.0, 7.0, 8.0, 10.0, 14.0, 20.0, 30.0, 60.0};
+  for (Moments m : kLevels) {
+    for (double s : ss) {
+      double worst = 0.0, at = 0.0;
+      for (double lam : lams) {
+        const Vec3 r = kDir * (0.5 * s * (1.0 + lam));
+        const MatX M2 = dense_mobility({Vec3::Zero(), r}, {1.0, lam}, 1.0, m);
+        const double e = pair_error(inverse(M2), exact_resistance(r, lam, m), lam, m);
+        if (e > worst) worst = e, at = lam;
+      }
+      MESSAGE(std::string(to_string(m)) << " s " << s << ": worst e " << worst << " at lambda " << at << ", e s^p "
+                                        << worst * std::pow(s, m == Moments::FTS ? 6 : 4));
+      CHECK(worst <= far_field_pair_error(s, m));
+    }
+  }
+  omp_set_num_threads(threads);
+}
