@@ -23,9 +23,20 @@
 #include "engine/core/layout.hpp"
 #include "engine/core/operators.hpp"
 
+#include <functional>
+#include <string>
 #include <vector>
 
 namespace stokesian {
+
+// One phase of a solver's set-up, for the step's task graph (engine/core/task_graph.hpp): `after`
+// lists earlier phases of the same set-up (indices into the list) it depends on.
+struct PreparePhase {
+  std::string name;
+  bool uses_threads = false;  // OpenMP loops over every thread inside (a team node)
+  std::function<void()> body;
+  std::vector<int> after;
+};
 
 struct HydroProblem {
   const Configuration& config;      // the prepared configuration
@@ -52,6 +63,11 @@ class HydroSolver {
   virtual bool needs_drift() const = 0;
   // Whether prepare() for n particles runs OpenMP loops over every thread (see TaskGraph::Kind).
   virtual bool prepare_uses_threads(long n) const = 0;
+  // prepare(c) as phases that the step's task graph may overlap with other work (c must outlive
+  // them); running every phase in an order that respects `after` equals prepare(c). Default: one.
+  virtual std::vector<PreparePhase> prepare_phases(const Configuration& c) {
+    return {{"hydro_setup", prepare_uses_threads(long(c.x.size())), [this, &c] { prepare(c); }, {}}};
+  }
   // The far-field operator the solver uses (nullptr for none).
   virtual const MobilityOperator* far_field() const = 0;
 };

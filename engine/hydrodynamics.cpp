@@ -30,6 +30,16 @@ void Hydrodynamics::prepare(const Configuration& c) {
   prepared_.store(c);
 }
 
+std::vector<PreparePhase> Hydrodynamics::prepare_phases(const Configuration& c) {
+  if (prepared_.same_as(c)) return {};
+  prepared_.valid = false;
+  std::vector<PreparePhase> ph = solver_->prepare_phases(c);
+  std::vector<int> all;
+  for (int k = 0; k < int(ph.size()); ++k) all.push_back(k);
+  ph.push_back({"hydro_prepared", false, [this, &c] { prepared_.store(c); }, all});
+  return ph;
+}
+
 HydroResult Hydrodynamics::solve(const Configuration& c, const std::vector<char>& fixed, const std::vector<Vec3>& F,
                                  const std::vector<Vec3>& T) {
   FlowSample sample;

@@ -19,6 +19,9 @@ class Hydrodynamics {
 
   // Set-up at a configuration; skipped when it equals the last prepared one.
   void prepare(const Configuration& c);
+  // The same as phases for the step's task graph (none when c is the prepared configuration); the
+  // last phase marks c prepared.
+  std::vector<PreparePhase> prepare_phases(const Configuration& c);
   // At the prepared configuration.
   HydroResult solve(const Configuration& c, const std::vector<char>& fixed, const std::vector<Vec3>& F,
                     const std::vector<Vec3>& T);

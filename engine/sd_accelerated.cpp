@@ -1,6 +1,7 @@
 #include "engine/sd_accelerated.hpp"
 
 #include "engine/core/errors.hpp"
+#include "engine/core/parallel.hpp"
 
 #include <chrono>
 #include <cmath>
@@ -36,11 +37,14 @@ AcceleratedStokesianDynamics::AcceleratedStokesianDynamics(std::unique_ptr<Mobil
     : m_(far_field->moments()), mu_(mu), op_(std::move(far_field)), near_(m_, mu, p), tol_(krylov_tolerance),
       shift_(shift), factor_gap_(factor_gap), method_(method) {}
 
-void AcceleratedStokesianDynamics::prepare(const Configuration& c) {
-  auto t0 = std::chrono::steady_clock::now();
+void AcceleratedStokesianDynamics::set_far_field(const Configuration& c) {
+  const auto t0 = std::chrono::steady_clock::now();
   op_->set_configuration(c);
   stats_.seconds_far_field_setup = seconds_since(t0);
-  t0 = std::chrono::steady_clock::now();
+}
+
+void AcceleratedStokesianDynamics::assemble_near_field(const Configuration& c) {
+  const auto t0 = std::chrono::steady_clock::now();
   config_.store(c);
   near_stats_ = {};
   Rnf_ = near_.assemble(c.x, c.a, c.domain, &near_stats_);
@@ -52,7 +56,19 @@ void AcceleratedStokesianDynamics::prepare(const Configuration& c) {
     for (long i = 0; i < long(c.x.size()); ++i)
       for (int q = 0; q < dv; ++q) factored_v_.push_back(i * d + q);
   }
+}
+
+void AcceleratedStokesianDynamics::prepare(const Configuration& c) {
+  set_far_field(c);
+  assemble_near_field(c);
   factorise(factored_v_);
+}
+
+std::vector<PreparePhase> AcceleratedStokesianDynamics::prepare_phases(const Configuration& c) {
+  const long n = long(c.x.size());
+  return {{"far_field_setup", op_->set_configuration_uses_threads(n), [this, &c] { set_far_field(c); }, {}},
+          {"near_field_assembly", true, [this, &c] { assemble_near_field(c); }, {}},  // parallel over pairs
+          {"factorisation", false, [this] { factorise(factored_v_); }, {1}}};
 }
 
 // R~ = R_nf restricted to the entries v, plus the shift on its diagonal; factorised by CHOLMOD.

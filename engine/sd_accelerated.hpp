@@ -76,6 +76,9 @@ class AcceleratedStokesianDynamics final : public HydroSolver {
   std::vector<Vec3> brownian_displacement(double kT, double dt, Rng& rng) override;
   bool needs_drift() const override { return true; }
   bool prepare_uses_threads(long n) const override { return op_->set_configuration_uses_threads(n); }
+  // far_field_setup | near_field_assembly -> factorisation (the factorisation runs on one thread
+  // beside whatever single phases the step has).
+  std::vector<PreparePhase> prepare_phases(const Configuration& c) override;
   const MobilityOperator* far_field() const override { return op_.get(); }
 
   const AcceleratedSdStats& stats() const { return stats_; }
@@ -85,6 +88,8 @@ class AcceleratedStokesianDynamics final : public HydroSolver {
 
  private:
   void factorise(const std::vector<long>& v);
+  void set_far_field(const Configuration& c);
+  void assemble_near_field(const Configuration& c);
   Moments m_;
   double mu_;
   std::unique_ptr<MobilityOperator> op_;

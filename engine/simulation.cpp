@@ -103,7 +103,14 @@ Evaluation Simulation::evaluate_checked(const State& s, const std::vector<Vec3>&
     }
     if (!scene_.forces.pair.empty()) forces::add_pair_forces(scene_.forces.pair, x, s.radius, domain, ev.force, &ev.pair);
   });
-  g.add("hydro_setup", hydro_.solver().prepare_uses_threads(n) ? Kind::team : Kind::single, [&] { hydro_.prepare(c); });
+  // The solver's set-up phases (far-field operator, near-field assembly, factorisation).
+  const std::vector<PreparePhase> setup = hydro_.prepare_phases(c);
+  std::vector<int> node(setup.size());
+  for (std::size_t k = 0; k < setup.size(); ++k) {
+    std::vector<int> after;
+    for (int j : setup[k].after) after.push_back(node[std::size_t(j)]);
+    node[k] = g.add(setup[k].name, setup[k].uses_threads ? Kind::team : Kind::single, setup[k].body, after);
+  }
   // Output steps find the overlapping pairs within the gap diagnostics' search (one pair search).
   if (diagnostics && overlaps)
     g.add("diagnostics", search, [&] {
