@@ -691,12 +691,13 @@ Scene parse_scene(const toml::table& root, const std::string& source) {
     R.fail(&flow, "[flow] rate", "required when kind is not \"none\"");
 
   const toml::table& hy = sub(R, root, "hydrodynamics");
-  R.only(hy, "hydrodynamics", {"model", "moments", "far_field", "tolerance", "lubrication_cutoff",
+  R.only(hy, "hydrodynamics", {"model", "moments", "solver", "far_field", "tolerance", "lubrication_cutoff",
                                  "lubrication_taper", "lubrication_min_gap"});
   s.hydro.model = R.name(hy, "hydrodynamics", "model", HydroModel::auto_);
   s.hydro.moments = R.name(hy, "hydrodynamics", "moments", MomentChoice::auto_);
   // A registered method or "auto": checked against the registry by model resolution.
   s.hydro.far_field = R.string(hy, "hydrodynamics", "far_field", s.hydro.far_field);
+  s.hydro.solver = R.choice(hy, "hydrodynamics", "solver", "auto", {"auto", "dense", "accelerated"});
   s.hydro.tolerance = R.number(hy, "hydrodynamics", "tolerance", 1e-6, 1e-14, 0.1);
   // lubrication_cutoff, lubrication_taper: "auto" or a number (docs/scene.md; resolved by
   // lubrication::near_field_params). A taper must leave s_in = cutoff - taper >= 2.
@@ -846,6 +847,7 @@ std::string resolved_toml(const Scene& s) {
   toml::table hydro{{"model", name_of(s.hydro.model)},
                     {"moments", name_of(s.hydro.moments)},
                     {"far_field", s.hydro.far_field},
+                    {"solver", s.hydro.solver},
                     {"tolerance", s.hydro.tolerance},
                     {"lubrication_min_gap", s.hydro.lubrication_min_gap}};
   if (s.hydro.lubrication_cutoff_auto) hydro.insert("lubrication_cutoff", "auto");

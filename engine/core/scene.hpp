@@ -104,6 +104,7 @@ struct HydroParams {
   HydroModel model = HydroModel::auto_;
   MomentChoice moments = MomentChoice::auto_;
   std::string far_field = "auto";  // a registered far-field method (engine/methods.cpp) or "auto"
+  std::string solver = "auto";     // Stokesian-dynamics solver: "auto", "dense" or "accelerated"
   double tolerance = 1e-6;  // relative accuracy of far-field products and iterative solves
   // lubrication_cutoff = "auto": the band from `tolerance` (lubrication::cutoff_for_tolerance); a number
   // (default 4): that s_cut, with the band [s_cut - lubrication_taper, s_cut]. The default is the
