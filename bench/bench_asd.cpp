@@ -3,10 +3,12 @@
 // on every particle, the ambient strain, stresslets solved for).
 //   "krylov"  GMRES vs BiCGStab and the shift B = s D (s = 0.1 ... 3): iterations and far-field
 //             products per solve against phi (the evidence for the choice in sd_accelerated.hpp);
+//   "crossover" dense vs accelerated per solve (open and periodic, phi = 0.3): the N where
+//             `solver = "auto"` switches (engine/model.cpp);
 //   "scaling" time per solve against N (phases: far-field set-up, near-field assembly, CHOLMOD
 //             factorisation, Krylov iterations), iterations, products, factor fill, 1 vs 2 threads,
 //             phi = 0.1, 0.3, 0.45; the dense SD solver beside it where it fits (N <= dense_max).
-// Rows carry `section` (0 krylov, 1 scaling), N, phi, threads, method (0 gmres, 1 bicgstab),
+// Rows carry `section` (0 krylov, 1 scaling, 2 crossover), N, phi, threads, method (0 gmres, 1 bicgstab),
 // shift, dense (1 for the dense solver). Usage: bench_asd [--quick] [--out DIR]; BENCH_MAX_N=N caps the sizes
 #include "bench/harness.hpp"
 #include "engine/accuracy.hpp"
@@ -34,7 +36,7 @@ struct Suspension {
   Domain domain;
 };
 
-Suspension suspension(long n, double phi, std::uint64_t seed) {
+Suspension suspension(long n, double phi, std::uint64_t seed, bool periodic = true) {
   PlacementParams p;
   p.count = n;
   p.seed = seed;
@@ -45,8 +47,10 @@ Suspension suspension(long n, double phi, std::uint64_t seed) {
   Suspension s;
   s.x = pl.position;
   s.a = pl.radius;
-  s.domain.kind = Domain::Kind::periodic;
-  s.domain.box = pl.box;
+  if (periodic) {
+    s.domain.kind = Domain::Kind::periodic;
+    s.domain.box = pl.box;
+  }
   return s;
 }
 
@@ -59,7 +63,7 @@ Run run_accelerated(const Suspension& s, double tol, double shift, AcceleratedSt
                     double factor_gap = AcceleratedStokesianDynamics::kFactorGap) {
   const double mu = 1.0;
   const AccuracyKnobs k = derive_knobs(tol, HydroModel::stokesian);
-  auto op = far_field_methods().find("pme")->make(MobilitySpec{Moments::FTS, mu, k.far_field});
+  auto op = far_field_methods().find(s.domain.periodic() ? "pme" : "direct")->make(MobilitySpec{Moments::FTS, mu, k.far_field});
   AcceleratedStokesianDynamics sd(std::move(op), mu, lubrication::NearFieldParams{}, k.krylov, shift, method,
                                   factor_gap);
   FlowParams fp;
@@ -106,6 +110,7 @@ int main(int argc, char** argv) {
 
   // Krylov method, shift and the gap beyond which pairs leave the factorised matrix.
   for (double phi : {0.1, 0.3, 0.45}) {
+    if (std::getenv("BENCH_SKIP_KRYLOV")) break;
     const long n = opt.quick ? 500 : 2000;
     const Suspension s = suspension(n, phi, 11);
     for (int method = 0; method < 2; ++method)
@@ -162,6 +167,18 @@ int main(int argc, char** argv) {
         }
       }
       omp_set_num_threads(max_threads);
+    }
+  // Crossover of `solver = "auto"` (engine/model.cpp): dense vs accelerated per solve, FTS, phi 0.3.
+  for (int periodic = 0; periodic < 2; ++periodic)
+    for (long n : periodic ? std::vector<long>{50, 100, 150, 200, 300} : std::vector<long>{100, 200, 300, 400, 600}) {
+      if (opt.quick && n > 200) continue;
+      const Suspension s = suspension(n, 0.3, 17, periodic != 0);
+      const Run r = run_accelerated(s, tol, AcceleratedStokesianDynamics::kShift, AcceleratedStokesianDynamics::Method::gmres);
+      const double t = run_dense(s);
+      std::printf("crossover %s N %4ld: accelerated %.3f s, dense %.3f s, ratio %.2f\n", periodic ? "periodic" : "open", n,
+                  r.seconds, t, r.seconds / t);
+      res.add({{"section", 2}, {"N", double(n)}, {"phi", 0.3}, {"periodic", double(periodic)}, {"threads", max_threads}},
+              {{"accelerated", r.seconds}, {"dense", t}});
     }
   std::printf("wrote %s\n", res.write(opt.out).c_str());
   return 0;
