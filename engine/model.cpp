@@ -4,6 +4,8 @@
 #include "engine/core/flow.hpp"
 #include "engine/methods.hpp"
 #include "engine/pair_forces.hpp"
+#include "lubrication/cutoff.hpp"
+#include "lubrication/near_field.hpp"
 #include "trees/neighbor_list.hpp"
 
 #include <algorithm>
@@ -259,9 +261,26 @@ ResolvedModel resolve_model(const Scene& s) {
                           chosen->name + " (" + chosen->description + ")");
     }
     m.far_field = chosen->name;
-    if (m.level == HydroModel::stokesian)
-      m.reasons.push_back("near field: exact two-sphere resistance minus the two-body far field, pairs with "
-                          "2r/(a_i+a_j) < lubrication_cutoff");
+    if (m.level == HydroModel::stokesian) {
+      const lubrication::NearFieldParams np = lubrication::near_field_params(s.hydro, m.moments);
+      std::ostringstream r;
+      r << "near field: exact two-sphere resistance minus the two-body far field, ";
+      if (np.taper > 0)
+        r << "full for 2r/(a_i+a_j) <= " << np.cutoff - np.taper << ", switched off smoothly to zero at " << np.cutoff;
+      else
+        r << "pairs with 2r/(a_i+a_j) < " << np.cutoff << " (hard step";
+      if (s.hydro.lubrication_cutoff_auto) {
+        const double floor = lubrication::tolerance_floor(m.moments);
+        r << " (lubrication_cutoff = \"auto\" from tolerance " << s.hydro.tolerance;
+        if (s.hydro.tolerance < floor)
+          r << "; the cutoff is capped, so the two-sphere error is bounded by " << floor << ", not the tolerance";
+        r << ")";
+      } else if (np.taper == 0) {
+        r << ", published SD: the two-sphere mobility jumps there by up to "
+          << (m.moments == Moments::FTS ? "2.3e-3" : "2.3e-2") << "; lubrication_cutoff = \"auto\" makes it continuous)";
+      }
+      m.reasons.push_back(r.str());
+    }
     if (m.brownian && m.moments == Moments::FTS)
       unavailable(s, "hydrodynamics", "moments",
                   "Brownian motion with rigid-particle stresslets (FTS) needs a Stokesian-dynamics Brownian solver, "

@@ -5,6 +5,7 @@
 #include "engine/core/types.hpp"
 #include "engine/methods.hpp"
 #include "engine/pair_forces.hpp"
+#include "lubrication/near_field.hpp"
 #include "ewald/lattice.hpp"
 #include "ewald/pme_parameters.hpp"
 
@@ -187,12 +188,13 @@ ResourceEstimate estimate_resources(const Scene& s, const ResolvedModel& model) 
     }
     if (model.brownian) eval_seconds += 30 * product / evaluations;  // one square root per step
     if (model.level == HydroModel::stokesian) {
-      const double r_nf = s.hydro.lubrication_cutoff * a_max;
+      const double cut = lubrication::near_field_params(s.hydro, model.moments).cutoff;
+      const double r_nf = cut * a_max;
       const double p_nf = N * neighbours(N, rho, r_nf) / 2;
       Keys k = model_keys;
       add_key(k, s, "hydrodynamics", "lubrication_cutoff");
       e.components.push_back({"near-field sparse matrix", (N + 2 * p_nf) * d * d * 28.0,
-                              num(p_nf) + " pairs with 2r/(a_i+a_j) < " + num(s.hydro.lubrication_cutoff) + ", " + dN,
+                              num(p_nf) + " pairs with 2r/(a_i+a_j) < " + num(cut) + ", " + dN,
                               k});
     }
   }

@@ -469,6 +469,36 @@ TEST_CASE("auto level for large N: a close pair is still found (cell list), and 
                             std::to_string(3.0 * (2999 % 15) - 0.8) + ", " + std::to_string(3.0 * ((2999 / 15) % 15)) +
                             ", " + std::to_string(3.0 * (2999 / 225)) + "]]\n";
   const ResolvedModel c = resolve_model(io::parse_scene(close, "close.toml"));
-  CHECK(c.level == HydroModel::far_field);  // N > 2000: no Stokesian-dynamics solver applies
-  CHECK(contains(c.describe(), "lubrication would be more accurate"));
+  CHECK(c.level == HydroModel::stokesian);  // N > 2000: accelerated SD (dense SD would not apply)
+  CHECK(c.solver == "accelerated_sd");
+  CHECK(contains(c.describe(), "close pairs (smallest gap"));
+}
+
+TEST_CASE("[hydrodynamics] solver: auto picks dense below the crossover and accelerated above; explicit choices; bad values") {
+  auto model = [](const std::string& text) { return resolve_model(io::parse_scene(text, "s.toml")); };
+  const std::string close = "[particles]\npositions = [[0,0,0],[2.1,0,0]]\n[hydrodynamics]\nmodel = \"stokesian\"\n";
+  CHECK(model(close).solver == "dense_sd");
+  CHECK(model(close + "solver = \"accelerated\"\n").solver == "accelerated_sd");
+  CHECK(model(close + "solver = \"dense\"\n").solver == "dense_sd");
+  const std::string many = "[particles]\ngenerate = \"lattice\"\ncount = 1000\nvolume_fraction = 0.2\n"
+                           "[hydrodynamics]\nmodel = \"stokesian\"\n";
+  const ResolvedModel big = model(many);
+  CHECK(big.solver == "accelerated_sd");
+  bool said = false;
+  for (const auto& r : big.reasons) said |= contains(r, "auto solver: N = 1000 > 300 -> accelerated_sd");
+  CHECK(said);
+  CHECK(model(many + "solver = \"dense\"\n").solver == "dense_sd");
+  // dense beyond its limit is refused with the reason.
+  const std::string e = error_of("[particles]\ngenerate = \"lattice\"\ncount = 2500\nvolume_fraction = 0.2\n"
+                                 "[hydrodynamics]\nmodel = \"stokesian\"\nsolver = \"dense\"\n");
+  CHECK(contains(e, "N <= 2000"));
+  const std::string bad = error_of(kTwo + "[hydrodynamics]\nsolver = \"fast\"\n");
+  CHECK(contains(bad, "bad.toml"));
+  CHECK(contains(bad, "solver"));
+  CHECK(contains(bad, "accelerated"));
+  // On another level the key is noted, not silently dropped.
+  const ResolvedModel ff = model(kTwo + "[hydrodynamics]\nmodel = \"far_field\"\nsolver = \"accelerated\"\n");
+  bool noted = false;
+  for (const auto& r : ff.reasons) noted |= contains(r, "applies to the stokesian level only");
+  CHECK(noted);
 }
