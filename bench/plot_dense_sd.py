@@ -5,7 +5,8 @@ field, factorisation, solve) of the new path.
 
 usage: plot_dense_sd.py [AFTER.json] [BEFORE.json] [OUT.png]
   defaults: bench/results/dense_sd.json, bench/results/dense_sd_before.json (skipped if absent),
-            docs/images/dense_sd.png
+            docs/images/dense_sd.png; AFTER with "_passive" before ".json" (the same driver run
+            with OMP_WAIT_POLICY=passive) is drawn too when it exists
 """
 import json
 import os
@@ -32,9 +33,11 @@ def load(path):
 
 
 after, before = load(after_src), load(before_src)
+passive = load(after_src.replace(".json", "_passive.json"))
 fig, axes = plt.subplots(1, 2, figsize=(13, 5))
 ax = axes[0]
-for table, label, style in ((before, "before (Eigen LLT + inverse)", "--"), (after, "LAPACK path", "-")):
+for table, label, style in ((before, "before (Eigen LLT + inverse)", "--"), (after, "LAPACK path", "-"),
+                            (passive, "LAPACK path, OMP_WAIT_POLICY=passive", ":")):
     for threads, marker in ((1, "o"), (2, "s")):
         ns = sorted(n for (n, t) in table if t == threads)
         if ns:
