@@ -3,6 +3,7 @@
 #include "engine/core/parallel.hpp"
 
 #include "engine/kernels/far_field.hpp"
+#include "engine/kernels/mobility_pair.hpp"
 #include "trees/neighbor_list.hpp"
 
 #include <algorithm>
@@ -67,7 +68,15 @@ MatX NearField::pair_block(const Vec3& r_vec_in, double ai, double aj) const {
   const Vec3 r_vec = xi < p_.min_gap ? Vec3(dir * half * (2.0 + p_.min_gap)) : r_vec_in;
   const MatX Rex = exact_pair(r_vec, ai, aj);
   // Two-body far-field mobility of the same pair (sphere i at 0, j at r_vec), inverted.
-  const MatX M2 = dense_mobility({Vec3::Zero(), r_vec}, {ai, aj}, mu_, m_);
+  // Blocks from the closed forms (mobility::fill_pair_block, as the dense assembly uses; the
+  // explicit-tensor dense_mobility is the reference it is tested against); (0,1) = (1,0)^T.
+  const int d = dof_per_particle(m_);
+  MatX M2(2 * d, 2 * d);
+  mobility::fill_pair_block(mobility::self_scalars(ai, mu_), Vec3::UnitZ(), m_, M2.data(), 2 * d);
+  mobility::fill_pair_block(mobility::self_scalars(aj, mu_), Vec3::UnitZ(), m_, M2.data() + d * 2 * d + d, 2 * d);
+  const double rn = r_vec.norm();
+  mobility::fill_pair_block(mobility::pair_scalars(aj, ai, rn, mu_, m_), Vec3(r_vec / rn), m_, M2.data() + d, 2 * d);
+  M2.topRightCorner(d, d) = M2.bottomLeftCorner(d, d).transpose();
   const MatX Rinf = M2.llt().solve(MatX::Identity(M2.rows(), M2.cols()));
   return Rex - Rinf;
 }
