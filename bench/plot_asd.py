@@ -72,16 +72,20 @@ for phi in PHIS:
         for p in PH:
             bars[p].append(r["phases"][p])
 x = np.arange(len(labels))
+total = sum(np.array(bars[p]) for p in PH)
 bottom = np.zeros(len(labels))
 for p in PH:
-    a.bar(x, bars[p], bottom=bottom, label=p)
-    bottom += np.array(bars[p])
+    frac = np.array(bars[p]) / total
+    a.bar(x, frac, bottom=bottom, label=p)
+    bottom += frac
+for i, t in enumerate(total):
+    a.text(x[i], 1.01, f"{t:.3g}", ha="center", va="bottom", fontsize=5, rotation=90)
 a.set_xticks(x)
 a.set_xticklabels(labels, fontsize=6)
-a.set_yscale("log")
-a.set_ylabel(f"seconds ({int(tmax)} threads)")
+a.set_ylim(0, 1.15)
+a.set_ylabel(f"share of the solve ({int(tmax)} threads); total seconds on top")
 a.set_title("phases per solve (phi / N)")
-a.legend(fontsize=7)
+a.legend(fontsize=7, loc="lower left")
 
 a = ax[1][0]
 for phi in PHIS:

@@ -51,8 +51,10 @@ std::string unusable(const SolverEntry& e, const Scene& s, bool brownian) {
 }
 
 // `[hydrodynamics] solver = "auto"` picks dense SD up to these N and accelerated SD beyond, by
-// measured cost per deterministic FTS solve (bench_asd and bench_dense_sd, docs/accelerated_sd.md).
-constexpr std::size_t kAutoDenseUpToOpen = 300, kAutoDenseUpToPeriodic = 100;
+// measured cost per deterministic FTS solve at phi = 0.3, tolerance 1e-4, 2 threads (bench_asd,
+// section "crossover", 2026-11-24): open domain accelerated / dense = 1.15 at N = 100, 0.64 at 200,
+// 0.30 at 300; periodic box 0.88 at N = 50, 0.29 at 100 (docs/benchmarks.md).
+constexpr std::size_t kAutoDenseUpToOpen = 120, kAutoDenseUpToPeriodic = 40;
 
 // The registered solver a `[hydrodynamics] solver` value names ("" for auto).
 std::string solver_named(const std::string& key) {

@@ -104,28 +104,9 @@ void AcceleratedStokesianDynamics::factorise(const std::vector<long>& v) {
   for (std::size_t i = 0; i < v.size(); ++i) t.emplace_back(int(i), int(i), shift_ * D_[v[i]]);
   Rt_.resize(long(v.size()), long(v.size()));
   Rt_.setFromTriplets(t.begin(), t.end());
-  try {
-    factor_.factorize(Rt_);
-  } catch (const NotPositiveDefinite& e) {
-    // R_nf is a sum of positive semi-definite pair blocks, so R_nf + B fails only with a pair
-    // block that is not: name the particle of the failing entry and its closest neighbour.
-    const long p = e.column >= 0 && e.column < long(v.size()) ? v[std::size_t(e.column)] / d : -1;
-    std::ostringstream o;
-    o << "accelerated SD: the near-field resistance plus shift is not positive definite (" << e.what() << ")";
-    if (p >= 0) {
-      long q = -1;
-      double best = 1e300;
-      for (long j = 0; j < long(config_.x.size()); ++j) {
-        if (j == p) continue;
-        const double r = config_.domain.minimum_image(config_.x[std::size_t(p)] - config_.x[std::size_t(j)]).norm();
-        const double xi = 2.0 * r / (config_.a[std::size_t(p)] + config_.a[std::size_t(j)]) - 2.0;
-        if (xi < best) best = xi, q = j;
-      }
-      o << " at particle " << p;
-      if (q >= 0) o << "; closest pair (" << p << ", " << q << ") at symmetric gap " << best;
-    }
-    throw PhysicsError(o.str());
-  }
+  // R_nf is a sum of positive semi-definite pair blocks, so R~ fails only with a pair block that
+  // is not: the error names the particle of the failing entry and its closest neighbour.
+  near_.factorize(Rt_, factor_, config_.x, config_.a, config_.domain, &v);
   factored_v_ = v;
   factored_ = true;
   stats_.factor_nonzeros = factor_.factor_nonzeros();

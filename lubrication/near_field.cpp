@@ -132,11 +132,13 @@ SparseMatrix NearField::assemble(const std::vector<Vec3>& x, const std::vector<d
 }
 
 void NearField::factorize(const SparseMatrix& R, CholmodFactor& factor, const std::vector<Vec3>& x,
-                          const std::vector<double>& a, const Domain& domain) const {
+                          const std::vector<double>& a, const Domain& domain, const std::vector<long>* entries) const {
   try {
     factor.factorize(R);
   } catch (const NotPositiveDefinite& e) {
-    const long d = dof_per_particle(m_), p = e.column / d;
+    const long d = dof_per_particle(m_);
+    const long p = (entries && e.column >= 0 && e.column < long(entries->size()) ? (*entries)[std::size_t(e.column)]
+                                                                                 : e.column) / d;
     long q = -1;
     double best = 1e300, gap = 0.0;
     for (long j = 0; j < long(x.size()); ++j) {

@@ -69,8 +69,11 @@ class NearField {
   // Factorises R (R_nf plus whatever the caller added, e.g. the preconditioner's diagonal) with
   // CHOLMOD. A failure is reported as PhysicsError naming the particle of the failing column and
   // its closest neighbour with their symmetric gap.
+  // entries: the generalised entry of each row/column of R when R is a principal sub-matrix
+  // (nullptr: R is the whole d N x d N matrix).
   void factorize(const SparseMatrix& R, CholmodFactor& factor, const std::vector<Vec3>& x,
-                 const std::vector<double>& a, const Domain& domain) const;
+                 const std::vector<double>& a, const Domain& domain,
+                 const std::vector<long>* entries = nullptr) const;
 
   const NearFieldParams& params() const { return p_; }
   Moments moments() const { return m_; }

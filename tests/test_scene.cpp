@@ -485,7 +485,7 @@ TEST_CASE("[hydrodynamics] solver: auto picks dense below the crossover and acce
   const ResolvedModel big = model(many);
   CHECK(big.solver == "accelerated_sd");
   bool said = false;
-  for (const auto& r : big.reasons) said |= contains(r, "auto solver: N = 1000 > 300 -> accelerated_sd");
+  for (const auto& r : big.reasons) said |= contains(r, "auto solver: N = 1000 > 120 -> accelerated_sd");
   CHECK(said);
   CHECK(model(many + "solver = \"dense\"\n").solver == "dense_sd");
   // dense beyond its limit is refused with the reason.

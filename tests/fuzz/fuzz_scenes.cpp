@@ -267,6 +267,7 @@ std::vector<Spec> specs() {
       {"flow", "rate", false, -1e12, 1e12, false, false, Spec::flow},
       {"hydrodynamics", "tolerance", false, 1e-14, 0.1, false, true, Spec::all},
       {"hydrodynamics", "lubrication_cutoff", false, 2, 100, true, false, Spec::all},
+      {"hydrodynamics", "lubrication_taper", false, 0, 98, false, false, Spec::all},  // <= cutoff - 2: "any"
       {"hydrodynamics", "lubrication_min_gap", false, 1e-8, 0.1, false, false, Spec::all},
       {"brownian", "seed", true, 0, kLongMax, false, true, Spec::all},
       {"time", "dt", false, 0, 1e12, true, true, Spec::all},
