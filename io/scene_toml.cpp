@@ -209,7 +209,9 @@ void read_particles(const Reader& R, const toml::table& t, Scene& s, const std::
                 "radius_ratio", "large_fraction", "sigma", "seed", "fixed", "region", "equilibration_sweeps", "min_gap"});
   const bool has_pos = t.contains("positions"), has_file = t.contains("file"), has_gen = t.contains("generate");
   if (int(has_pos) + int(has_file) + int(has_gen) != 1)
-    R.fail(&t, "[particles]", "give exactly one of positions, file, generate");
+    R.fail(&t, "[particles] positions/file/generate",
+           std::string(has_pos + has_file + has_gen == 0 ? "none of these keys is given" : "more than one of these keys is given") +
+               " (allowed: exactly one of positions, file, generate)");
   // Keys of the generator (`radius` also sizes positions and radius-less XYZ files).
   for (const char* key : {"count", "volume_fraction", "size_distribution", "radius_ratio", "large_fraction", "sigma",
                           "seed", "region", "equilibration_sweeps", "min_gap"})
@@ -743,7 +745,8 @@ Scene parse_scene(const toml::table& root, const std::string& source) {
                                 std::numeric_limits<long>::max() / 2);
   s.time.start_time = R.number(ti, "time", "start_time", from_run ? from_run->time : 0.0, -1e300, 1e300);
   if (s.time.steps > std::numeric_limits<long>::max() / 2)
-    R.fail(ti.get("steps"), "[time] steps", "at most " + std::to_string(std::numeric_limits<long>::max() / 2));
+    R.fail(ti.get("steps"), "[time] steps",
+           std::to_string(s.time.steps) + " is too many (allowed: 0 to " + std::to_string(std::numeric_limits<long>::max() / 2) + ")");
   s.time.integrator = R.string(ti, "time", "integrator", s.time.integrator);  // checked by model resolution
   s.time.rkf_tolerance = R.number(ti, "time", "rkf_tolerance", 1e-6, 1e-14, 1.0);
 

@@ -87,28 +87,80 @@ SparseMatrix NearField::assemble(const std::vector<Vec3>& x, const std::vector<d
   const double amax = *std::max_element(a.begin(), a.end());
   tables_.prepare_radii(a);  // exact tables for few distinct size ratios, interpolated in ln(lambda) otherwise
   const auto pairs = trees::neighbor_pairs(x, a, domain, (p_.cutoff - 2.0) * amax);
-  // Pair blocks in parallel into a buffer, summed serially in pair order (deterministic).
-  std::vector<MatX> blocks(pairs.size());
-  std::vector<char> inside(pairs.size(), 0);
-  NearFieldStats st;
-#pragma omp parallel for schedule(dynamic, 8) if (long(pairs.size()) >= parallel::kNearFieldPairs)
-  for (long k = 0; k < long(pairs.size()); ++k) {
-    const auto& p = pairs[std::size_t(k)];
-    const double ai = a[std::size_t(p.i)], aj = a[std::size_t(p.j)];
-    const double s = 2.0 * p.dist / (ai + aj), w = weight(s);
-    if (!(w > 0.0)) continue;
-    inside[std::size_t(k)] = w < 1.0 ? 2 : 1;
-    blocks[std::size_t(k)] = pair_block(-p.r, ai, aj);  // r_vec = x_j - x_i
-    if (w < 1.0) blocks[std::size_t(k)] *= w;
-  }
-  std::vector<Eigen::Triplet<double>> trip;
-  trip.reserve(pairs.size() * std::size_t(4 * d * d));
+  // The sparse pattern first (block column j: row blocks j and its partners, ascending), then the
+  // pair blocks in parallel: off-diagonal blocks straight into their own places, the two diagonal
+  // parts into a buffer that is summed serially in pair order (deterministic for any thread
+  // count). No triplet list: the peak memory is the matrix plus 2 d^2 doubles per pair.
+  const long n = long(x.size());
+  std::vector<std::size_t> in;  // pairs with a non-zero weight, in pair order
+  std::vector<double> wt;
   for (std::size_t k = 0; k < pairs.size(); ++k) {
-    if (!inside[k]) continue;
     const auto& p = pairs[k];
+    const double w = weight(2.0 * p.dist / (a[std::size_t(p.i)] + a[std::size_t(p.j)]));
+    if (w > 0.0) {
+      in.push_back(k);
+      wt.push_back(w);
+    }
+  }
+  std::vector<std::vector<int>> rows(static_cast<std::size_t>(n));
+  for (std::size_t k : in) {
+    rows[std::size_t(pairs[k].i)].push_back(pairs[k].j);
+    rows[std::size_t(pairs[k].j)].push_back(pairs[k].i);
+  }
+  for (long q = 0; q < n; ++q) {
+    auto& r = rows[std::size_t(q)];
+    if (r.empty()) continue;
+    r.push_back(int(q));
+    std::sort(r.begin(), r.end());
+  }
+  SparseMatrix R(n * d, n * d);
+  long nnz = 0;
+  for (const auto& r : rows) nnz += long(r.size()) * d * d;
+  R.resizeNonZeros(nnz);
+  int* outer = R.outerIndexPtr();
+  int* inner = R.innerIndexPtr();
+  double* val = R.valuePtr();
+  {
+    long at = 0;
+    for (long q = 0; q < n; ++q)
+      for (int c = 0; c < d; ++c) {
+        outer[q * d + c] = int(at);
+        for (int rq : rows[std::size_t(q)])
+          for (int u = 0; u < d; ++u) inner[at++] = rq * d + u;
+      }
+    outer[n * d] = int(at);
+  }
+  std::fill(val, val + nnz, 0.0);
+  // Entry (row block rq, column block q, u, v).
+  auto entry = [&](int rq, int q, int u, int v) {
+    const auto& r = rows[std::size_t(q)];
+    const long pos = long(std::lower_bound(r.begin(), r.end(), rq) - r.begin());
+    return val + outer[q * d + v] + pos * d + u;
+  };
+  std::vector<double> diag(in.size() * std::size_t(2 * d * d));
+#pragma omp parallel for schedule(dynamic, 8) if (long(in.size()) >= parallel::kNearFieldPairs)
+  for (long m = 0; m < long(in.size()); ++m) {
+    const auto& p = pairs[in[std::size_t(m)]];
+    const double ai = a[std::size_t(p.i)], aj = a[std::size_t(p.j)];
+    MatX B = pair_block(-p.r, ai, aj);  // r_vec = x_j - x_i
+    if (wt[std::size_t(m)] < 1.0) B *= wt[std::size_t(m)];
+    double* ij = entry(p.i, p.j, 0, 0);
+    double* ji = entry(p.j, p.i, 0, 0);
+    double* dg = diag.data() + std::size_t(m) * std::size_t(2 * d * d);
+    for (int v = 0; v < d; ++v)
+      for (int u = 0; u < d; ++u) {
+        ij[outer[p.j * d + v] - outer[p.j * d] + u] = B(u, d + v);
+        ji[outer[p.i * d + v] - outer[p.i * d] + u] = B(d + u, v);
+        dg[v * d + u] = B(u, v);
+        dg[d * d + v * d + u] = B(d + u, d + v);
+      }
+  }
+  NearFieldStats st;
+  for (std::size_t m = 0; m < in.size(); ++m) {
+    const auto& p = pairs[in[m]];
     const double xi = 2.0 * p.dist / (a[std::size_t(p.i)] + a[std::size_t(p.j)]) - 2.0;
     ++st.pairs;
-    st.tapered += inside[k] == 2;
+    st.tapered += wt[m] < 1.0;
     st.regularised += xi < p_.min_gap;
     st.overlaps += xi < 0;
     if (xi < st.min_xi) {
@@ -116,17 +168,15 @@ SparseMatrix NearField::assemble(const std::vector<Vec3>& x, const std::vector<d
       st.worst_i = p.i;
       st.worst_j = p.j;
     }
-    const MatX& B = blocks[k];
-    const int idx[2] = {p.i, p.j};
-    for (int bi = 0; bi < 2; ++bi)
-      for (int bj = 0; bj < 2; ++bj)
-        for (int u = 0; u < d; ++u)
-          for (int v = 0; v < d; ++v)
-            trip.emplace_back(idx[bi] * d + u, idx[bj] * d + v, B(bi * d + u, bj * d + v));
+    const double* dg = diag.data() + m * std::size_t(2 * d * d);
+    double* ii = entry(p.i, p.i, 0, 0);
+    double* jj = entry(p.j, p.j, 0, 0);
+    for (int v = 0; v < d; ++v)
+      for (int u = 0; u < d; ++u) {
+        ii[outer[p.i * d + v] - outer[p.i * d] + u] += dg[v * d + u];
+        jj[outer[p.j * d + v] - outer[p.j * d] + u] += dg[d * d + v * d + u];
+      }
   }
-  SparseMatrix R(long(x.size()) * d, long(x.size()) * d);
-  R.setFromTriplets(trip.begin(), trip.end());
-  R.makeCompressed();
   if (stats) *stats = st;
   return R;
 }
