@@ -5,7 +5,7 @@ field, factorisation, solve) of the new path.
 
 usage: plot_dense_sd.py [AFTER.json] [BEFORE.json] [OUT.png]
   defaults: bench/results/dense_sd.json, bench/results/dense_sd_before.json (skipped if absent),
-            docs/images/dense_sd.png; AFTER with "_passive" before ".json" (the same driver run
+            bench/results/dense_sd.png; AFTER with "_passive" before ".json" (the same driver run
             with OMP_WAIT_POLICY=passive) is drawn too when it exists
 """
 import json
@@ -19,7 +19,7 @@ import numpy as np
 
 after_src = sys.argv[1] if len(sys.argv) > 1 else "bench/results/dense_sd.json"
 before_src = sys.argv[2] if len(sys.argv) > 2 else "bench/results/dense_sd_before.json"
-out = sys.argv[3] if len(sys.argv) > 3 else "docs/images/dense_sd.png"
+out = sys.argv[3] if len(sys.argv) > 3 else "bench/results/dense_sd.png"
 PHASES = ["assembly", "near_field", "factorisation", "solve"]
 
 
