@@ -9,7 +9,8 @@
 //             factorisation, Krylov iterations), iterations, products, factor fill, 1 vs 2 threads,
 //             phi = 0.1, 0.3, 0.45; the dense SD solver beside it where it fits (N <= dense_max).
 // Rows carry `section` (0 krylov, 1 scaling, 2 crossover), N, phi, threads, method (0 gmres, 1 bicgstab),
-// shift, dense (1 for the dense solver). Usage: bench_asd [--quick] [--out DIR]; BENCH_MAX_N=N caps the sizes
+// shift, dense (1 for the dense solver). Usage: bench_asd [--quick] [--out DIR]; BENCH_MAX_N=N caps the
+// sizes; BENCH_MIN_N=N runs only the scaling section from N on (results asd_from_<N>.json)
 #include "bench/harness.hpp"
 #include "engine/accuracy.hpp"
 #include "engine/core/flow.hpp"
@@ -104,13 +105,15 @@ int main(int argc, char** argv) {
   const bench::Options opt = bench::parse_options(argc, argv);
   long max_n = opt.quick ? 2000 : 100000, dense_max = opt.quick ? 0 : 400;
   if (const char* e = std::getenv("BENCH_MAX_N")) max_n = std::atol(e);
+  long min_n = 0;  // BENCH_MIN_N: skip the krylov and crossover sections and smaller sizes
+  if (const char* e = std::getenv("BENCH_MIN_N")) min_n = std::atol(e);
   const int max_threads = omp_get_max_threads();
-  Results res(opt.quick ? "asd_quick" : "asd");
+  Results res(opt.quick ? "asd_quick" : std::getenv("BENCH_MIN_N") ? "asd_from_" + std::string(std::getenv("BENCH_MIN_N")) : "asd");
   const double tol = 1e-4;
 
   // Krylov method, shift and the gap beyond which pairs leave the factorised matrix.
   for (double phi : {0.1, 0.3, 0.45}) {
-    if (std::getenv("BENCH_SKIP_KRYLOV")) break;
+    if (std::getenv("BENCH_SKIP_KRYLOV") || min_n > 0) break;
     const long n = opt.quick ? 500 : 2000;
     const Suspension s = suspension(n, phi, 11);
     for (int method = 0; method < 2; ++method)
@@ -139,7 +142,7 @@ int main(int argc, char** argv) {
                                       : std::vector<long>{1000, 2000, 5000, 10000, 20000, 50000, 100000};
   for (double phi : {0.1, 0.3, 0.45})
     for (long n : sizes) {
-      if (n > max_n) continue;
+      if (n > max_n || n < min_n) continue;
       const Suspension s = suspension(n, phi, 13);
       for (int threads : {1, max_threads}) {
         if (threads == 1 && max_threads == 1) continue;
@@ -171,7 +174,7 @@ int main(int argc, char** argv) {
       omp_set_num_threads(max_threads);
     }
   // Crossover of `solver = "auto"` (engine/model.cpp): dense vs accelerated per solve, FTS, phi 0.3.
-  for (int periodic = 0; periodic < 2; ++periodic)
+  for (int periodic = 0; periodic < (min_n > 0 ? 0 : 2); ++periodic)
     for (long n : periodic ? std::vector<long>{50, 100, 150, 200, 300} : std::vector<long>{100, 200, 300, 400, 600}) {
       if (opt.quick && n > 200) continue;
       const Suspension s = suspension(n, 0.3, 17, periodic != 0);
