@@ -5,7 +5,8 @@ it; (b) the phases of the 2-thread solves (far-field set-up, near-field assembly
 Krylov); (c) far-field products per solve against N; (d) dense vs accelerated at small N (the
 `solver = "auto"` crossover). Prints the fitted exponents and the 2-thread speed-ups.
 
-usage: plot_asd.py [RESULTS.json] [OUT.png]   (default: bench/results/asd.json)
+usage: plot_asd.py [RESULTS.json] [OUT.png] [MORE.json ...]   (default: bench/results/asd.json; MORE:
+rows of further runs, e.g. bench_asd with BENCH_MIN_N=100000 -> asd_from_100000.json)
 """
 import json
 import sys
@@ -19,6 +20,11 @@ src = sys.argv[1] if len(sys.argv) > 1 else "bench/results/asd.json"
 out = sys.argv[2] if len(sys.argv) > 2 else src.replace(".json", ".png")
 data = json.load(open(src))
 rows = data["rows"]
+extra_git = []
+for extra in sys.argv[3:]:
+    e = json.load(open(extra))
+    rows += e["rows"]
+    extra_git.append(e.get("machine", {}).get("git", "?"))
 PHIS = [0.1, 0.3, 0.45]
 COLORS = {0.1: "tab:blue", 0.3: "tab:orange", 0.45: "tab:red"}
 
@@ -120,7 +126,8 @@ for phi in PHIS:
         if tmax > 1:
             print(f"phi {phi} N {int(n)}: {int(tmax)} threads / 1 thread speed-up {one[n] / two[n]:.2f}")
 m = data.get("machine", {})
-fig.suptitle(f"bench_asd on {m.get('cpu', '?')} ({m.get('logical_cores', '?')} cores), {m.get('date', '')}, git {m.get('git', '')}",
+more = f" (+ rows from git {', '.join(extra_git)})" if extra_git else ""
+fig.suptitle(f"bench_asd on {m.get('cpu', '?')} ({m.get('logical_cores', '?')} cores), {m.get('date', '')}, git {m.get('git', '')}{more}",
              fontsize=9)
 fig.tight_layout()
 fig.savefig(out, dpi=110)
