@@ -1,0 +1,519 @@
+// Fast real-space Ewald sum; the mathematics and the accuracy contract are in real_space.hpp.
+#include "ewald/real_space.hpp"
+
+#include "ewald/ewald_split.hpp"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace stokesian::ewald {
+namespace {
+
+using LD = long double;
+constexpr LD kSqrtPiL = 1.772453850905516027298167483341145183L;
+constexpr double kR2 = 0.70710678118654752440;  // sqrt(1/2), sym_traceless.hpp basis
+constexpr double kR6 = 0.40824829046386301637;  // 1/sqrt(6)
+
+// Below xi r = kSeries the derivatives come from the Taylor series in x = xi r (kTerms terms:
+// truncation < 1e-40 at x = 0.5); above it from the closed forms, both in long double.
+constexpr LD kSeries = 0.5L;
+constexpr int kTerms = 30;
+
+// Derivatives d1..d4 (in r) of the wave functions W0, W1, W2 of ewald_split.hpp at r > 0:
+//   W0 = r erf x + e^{-x^2} / (sqrt(pi) xi),  W1 = 2 erf(x) / r + 2 xi e^{-x^2} / sqrt(pi),
+//   W2 = -(xi^3 / sqrt(pi)) (20 - 8 x^2) e^{-x^2},  x = xi r.
+// Series: W_j = scale_j sum_n s_{j,n} x^(2n), so d_k W_j = scale_j xi^k sum_n s_{j,n} (2n)!/(2n-k)! x^(2n-k).
+void wave_derivatives(LD r, LD xi, std::array<std::array<LD, 4>, 3>& d) {
+  const LD x = xi * r;
+  if (x < kSeries) {
+    const LD scale[3] = {1.0L / (kSqrtPiL * xi), 2.0L * xi / kSqrtPiL, -xi * xi * xi / kSqrtPiL};
+    for (auto& dj : d) dj.fill(0.0L);
+    LD fact = 1.0L, fact_prev = 1.0L, sign = 1.0L;  // n!, (n-1)!, (-1)^n
+    for (int n = 0; n <= kTerms; ++n) {
+      if (n > 0) {
+        fact_prev = fact;
+        fact *= n;
+        sign = -sign;
+      }
+      LD s[3];
+      s[0] = sign / fact + (n > 0 ? 2.0L * (-sign) / (fact_prev * (2.0L * n - 1.0L)) : 0.0L);
+      s[1] = sign / fact * (2.0L / (2.0L * n + 1.0L) + 1.0L);
+      s[2] = 20.0L * sign / fact - (n > 0 ? 8.0L * (-sign) / fact_prev : 0.0L);
+      LD falling = 1.0L;  // (2n)! / (2n - k)!
+      for (int k = 1; k <= 4; ++k) {
+        falling *= LD(2 * n - k + 1);
+        if (falling == 0.0L) break;
+        const LD term = falling * std::pow(x, LD(2 * n - k));
+        for (int j = 0; j < 3; ++j) d[j][k - 1] += s[j] * term;
+      }
+    }
+    for (int j = 0; j < 3; ++j) {
+      LD xik = 1.0L;
+      for (int k = 0; k < 4; ++k) {
+        xik *= xi;
+        d[j][k] *= scale[j] * xik;
+      }
+    }
+    return;
+  }
+  const LD E = std::exp(-x * x) / kSqrtPiL, er = std::erf(x);
+  const LD x2 = x * x, x3 = x2 * x, x5 = x3 * x2, x7 = x5 * x2, x9 = x7 * x2;
+  const LD xi2 = xi * xi, xi3 = xi2 * xi, xi4 = xi3 * xi;
+  const LD r2 = r * r, r3 = r2 * r, r4 = r3 * r, r5 = r4 * r;
+  d[0] = {er, 2.0L * xi * E, -4.0L * xi3 * r * E, xi3 * (8.0L * x2 - 4.0L) * E};
+  d[1] = {-2.0L * er / r2 - 4.0L * r * xi3 * E + 4.0L * xi * E / r,
+          4.0L * er / r3 - 4.0L * E * (x3 * (3.0L - 2.0L * x2) + 2.0L * x) / r3,
+          -12.0L * er / r4 - 4.0L * E * (4.0L * x7 - 10.0L * x5 - 4.0L * x3 - 6.0L * x) / r4,
+          48.0L * er / r5 - 8.0L * E * (-4.0L * x9 + 16.0L * x7 - x5 + 8.0L * x3 + 12.0L * x) / r5};
+  d[2] = {-xi4 * (16.0L * x3 - 56.0L * x) * E, -xi4 * xi * (-32.0L * x2 * x2 + 160.0L * x2 - 56.0L) * E,
+          -xi4 * xi2 * (64.0L * x5 - 448.0L * x3 + 432.0L * x) * E,
+          -xi4 * xi3 * (-128.0L * x3 * x3 + 1216.0L * x2 * x2 - 2208.0L * x2 + 432.0L) * E};
+}
+
+// Smallest self mobility (of the moments in m) of a sphere of radius a.
+double self_min(double a, double mu, Moments m) {
+  double s = 1.0 / (6.0 * kPi * mu * a);
+  if (m != Moments::F) s = std::min(s, 1.0 / (8.0 * kPi * mu * a * a * a));
+  if (m == Moments::FTS) s = std::min(s, 3.0 / (20.0 * kPi * mu * a * a * a));
+  return s;
+}
+
+// y += (block with scalars s, unit vector e) x for one source particle; layout [F T S] / [U W E].
+template <Moments M>
+inline void apply_block(const mobility::PairScalars& s, double ex, double ey, double ez, const double* x, double* y) {
+  const double Fx = x[0], Fy = x[1], Fz = x[2];
+  const double eF = ex * Fx + ey * Fy + ez * Fz;
+  const double cF = (s.xa - s.ya) * eF;
+  y[0] += cF * ex + s.ya * Fx;
+  y[1] += cF * ey + s.ya * Fy;
+  y[2] += cF * ez + s.ya * Fz;
+  if constexpr (M == Moments::F) return;
+  else {
+    const double Tx = x[3], Ty = x[4], Tz = x[5];
+    const double eT = ex * Tx + ey * Ty + ez * Tz;
+    const double Txe_x = Ty * ez - Tz * ey, Txe_y = Tz * ex - Tx * ez, Txe_z = Tx * ey - Ty * ex;
+    const double Fxe_x = Fy * ez - Fz * ey, Fxe_y = Fz * ex - Fx * ez, Fxe_z = Fx * ey - Fy * ex;
+    const double cT = (s.xc - s.yc) * eT;
+    y[0] += s.ybt * Txe_x;
+    y[1] += s.ybt * Txe_y;
+    y[2] += s.ybt * Txe_z;
+    y[3] += s.yb * Fxe_x + cT * ex + s.yc * Tx;
+    y[4] += s.yb * Fxe_y + cT * ey + s.yc * Ty;
+    y[5] += s.yb * Fxe_z + cT * ez + s.yc * Tz;
+    if constexpr (M == Moments::FT) return;
+    else {
+      const double s0 = x[6], s1 = x[7], s2 = x[8], s3 = x[9], s4 = x[10];
+      const double Sxx = kR2 * s0 - kR6 * s1, Syy = -kR2 * s0 - kR6 * s1, Szz = 2.0 * kR6 * s1;
+      const double Sxy = kR2 * s2, Sxz = kR2 * s3, Syz = kR2 * s4;
+      const double Sex = Sxx * ex + Sxy * ey + Sxz * ez, Sey = Sxy * ex + Syy * ey + Syz * ez,
+                   Sez = Sxz * ex + Syz * ey + Szz * ez;
+      const double eSe = ex * Sex + ey * Sey + ez * Sez;
+      const double cU = (s.xgt - 2.0 * s.ygt) * eSe, g2 = 2.0 * s.ygt;
+      y[0] += cU * ex + g2 * Sex;
+      y[1] += cU * ey + g2 * Sey;
+      y[2] += cU * ez + g2 * Sez;
+      const double h2 = 2.0 * s.yht;
+      y[3] += h2 * (ey * Sez - ez * Sey);
+      y[4] += h2 * (ez * Sex - ex * Sez);
+      y[5] += h2 * (ex * Sey - ey * Sex);
+      // E = alpha e e + e v^T + v e^T + zm S (+ multiples of I, which the 5-basis drops).
+      const double alpha = (s.xg - 2.0 * s.yg) * eF + (1.5 * s.xm - 2.0 * s.ym + 0.5 * s.zm) * eSe;
+      const double ymz = s.ym - s.zm;
+      const double vx = s.yg * Fx + s.yh * Txe_x + ymz * Sex, vy = s.yg * Fy + s.yh * Txe_y + ymz * Sey,
+                   vz = s.yg * Fz + s.yh * Txe_z + ymz * Sez;
+      const double Mxx = alpha * ex * ex + 2.0 * ex * vx, Myy = alpha * ey * ey + 2.0 * ey * vy,
+                   Mzz = alpha * ez * ez + 2.0 * ez * vz;
+      const double Mxy = alpha * ex * ey + ex * vy + vx * ey, Mxz = alpha * ex * ez + ex * vz + vx * ez,
+                   Myz = alpha * ey * ez + ey * vz + vy * ez;
+      y[6] += kR2 * (Mxx - Myy) + s.zm * s0;
+      y[7] += kR6 * (2.0 * Mzz - Mxx - Myy) + s.zm * s1;
+      y[8] += 2.0 * kR2 * Mxy + s.zm * s2;
+      y[9] += 2.0 * kR2 * Mxz + s.zm * s3;
+      y[10] += 2.0 * kR2 * Myz + s.zm * s4;
+    }
+  }
+}
+
+}  // namespace
+
+RealSpaceSum::RealSpaceSum(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain,
+                           double cutoff_gap, double xi, double mu, Moments m, double tolerance)
+    : n_(long(x.size())), m_(m), domain_(domain), cutoff_gap_(cutoff_gap), xi_(xi), mu_(mu), radius_(a) {
+  if (x.empty() || x.size() != a.size())
+    throw std::invalid_argument("RealSpaceSum: " + std::to_string(x.size()) + " positions and " +
+                                std::to_string(a.size()) + " radii (need equal, non-zero counts)");
+  if (!domain.periodic()) throw std::invalid_argument("RealSpaceSum: the domain must be periodic");
+  for (double r : a)
+    if (!(r > 0.0 && std::isfinite(r))) throw std::invalid_argument("RealSpaceSum: radius " + std::to_string(r) + " not positive");
+  if (!(cutoff_gap > 0.0 && std::isfinite(cutoff_gap)))
+    throw std::invalid_argument("RealSpaceSum: cutoff_gap " + std::to_string(cutoff_gap) + " must be positive");
+  if (!(xi > 0.0 && std::isfinite(xi))) throw std::invalid_argument("RealSpaceSum: xi " + std::to_string(xi) + " must be positive");
+  if (!(mu > 0.0 && std::isfinite(mu))) throw std::invalid_argument("RealSpaceSum: mu " + std::to_string(mu) + " must be positive");
+  if (!(tolerance >= 1e-14 && tolerance <= 0.1))
+    throw std::invalid_argument("RealSpaceSum: tolerance " + std::to_string(tolerance) + " outside [1e-14, 0.1]");
+  const double amax = *std::max_element(a.begin(), a.end());
+  const double range = cutoff_gap + 2.0 * amax, lmin = domain.box.minCoeff();
+  if (!(lmin > 0.0)) throw std::invalid_argument("RealSpaceSum: periodic box with non-positive edge");
+  if (range > 0.5 * lmin)
+    throw std::invalid_argument("RealSpaceSum: interaction range " + std::to_string(range) +
+                                " exceeds half the smallest box edge " + std::to_string(0.5 * lmin) +
+                                "; the minimum-image pair list cannot represent this box");
+  build_table(tolerance);
+  self0_.resize(3 * a.size());
+#pragma omp parallel for schedule(static)
+  for (long i = 0; i < n_; ++i) {
+    const mobility::PairScalars sc = self_correction(a[i], xi_, mu_);
+    self0_[3 * i] = sc.xa;
+    self0_[3 * i + 1] = sc.xc;
+    self0_[3 * i + 2] = sc.xm;
+  }
+  set_positions(x);
+}
+
+void RealSpaceSum::build_table(double tolerance) {
+  const auto [pmin, pmax] = std::minmax_element(radius_.begin(), radius_.end());
+  const double amin = *pmin, amax = *pmax;
+  r_lo_ = 2.0 * amin;
+  const double r_hi = cutoff_gap_ + 2.0 * amax;
+  const int kmax = m_ == Moments::F ? 2 : 4;
+  nf_ = 3 * kmax;
+  table_target_ = std::max(1e-4 * tolerance, 1e-15);
+  const LD kmob = 1.0L / (8.0L * LD(kPi) * LD(mu_));
+  constexpr int nodes = kCoef;
+  LD tnode[nodes];
+  for (int q = 0; q < nodes; ++q) tnode[q] = std::cos(LD(kPi) * (q + 0.5L) / nodes);
+  // Monomial coefficients of the Chebyshev polynomials T_0 .. T_7.
+  LD T[nodes][nodes] = {};
+  T[0][0] = 1.0L;
+  T[1][1] = 1.0L;
+  for (int n = 1; n + 1 < nodes; ++n)
+    for (int c = 0; c < nodes; ++c) T[n + 1][c] = (c > 0 ? 2.0L * T[n][c - 1] : 0.0L) - T[n - 1][c];
+
+  std::array<std::array<LD, 4>, 3> d;
+  for (int nint = 4;; nint *= 2) {
+    const double h = (r_hi - r_lo_) / nint;
+    std::vector<double> tab(std::size_t(nint) * kCoef * nf_);
+    for (int i = 0; i < nint; ++i) {
+      LD val[nodes][12];
+      for (int q = 0; q < nodes; ++q) {
+        wave_derivatives(LD(r_lo_) + LD(h) * (i + 0.5L * (tnode[q] + 1.0L)), LD(xi_), d);
+        for (int k = 0; k < kmax; ++k)
+          for (int j = 0; j < 3; ++j) val[q][3 * k + j] = kmob * d[j][k];
+      }
+      for (int f = 0; f < nf_; ++f) {
+        LD cheb[nodes], mono[nodes] = {};
+        for (int n = 0; n < nodes; ++n) {
+          LD sum = 0.0L;
+          for (int q = 0; q < nodes; ++q) sum += val[q][f] * std::cos(LD(kPi) * n * (q + 0.5L) / nodes);
+          cheb[n] = sum * (n == 0 ? 1.0L : 2.0L) / nodes;
+        }
+        for (int n = 0; n < nodes; ++n)
+          for (int c = 0; c < nodes; ++c) mono[c] += cheb[n] * T[n][c];
+        for (int c = 0; c < nodes; ++c) tab[(std::size_t(i) * kCoef + (kCoef - 1 - c)) * nf_ + f] = double(mono[c]);
+      }
+    }
+    // Measured error on 9 points per interval (ends included), evaluated as the kernel does.
+    double worst = 0.0;
+    for (int i = 0; i < nint; ++i)
+      for (int p = 0; p <= 8; ++p) {
+        const double t = -1.0 + 0.25 * p, r = r_lo_ + h * (i + 0.5 * (t + 1.0));
+        wave_derivatives(LD(r), LD(xi_), d);
+        // A separated pair at distance r has a_a + a_b <= r: c1 <= min(r^2, 2 a_max^2) / 6,
+        // c2 <= min(r/2, a_max)^4 / 36, and its smaller sphere has radius rho <= min(a_max, r/2).
+        const double rho = std::min(amax, 0.5 * r), u = 1.0 / r;
+        const double cmax[3] = {1.0, std::min(r * r, 2.0 * amax * amax) / 6.0, rho * rho * rho * rho / 36.0};
+        double e[4] = {0.0, 0.0, 0.0, 0.0};  // bound of the error of d_k (k = 1..4) of the pair's Psi
+        for (int f = 0; f < nf_; ++f) {
+          double w = tab[(std::size_t(i) * kCoef) * nf_ + f];
+          for (int c = 1; c < kCoef; ++c) w = w * t + tab[(std::size_t(i) * kCoef + c) * nf_ + f];
+          const int k = f / 3, j = f % 3;
+          e[k] += std::abs(double(LD(w) - kmob * d[j][k])) * cmax[j];
+        }
+        // Largest multipliers of d1..d4 in the scalars (scalars_from_derivatives): U <- F uses
+        // 2u d1 + d2; the torque/stresslet scalars at most max(3u^2, 6u^3) d1 + max(3u, 6u^2) d2
+        // + max(1/2, 3u) d3 + d4 / 2. Each is compared with the matching self mobility at rho.
+        const double u2 = u * u, u3 = u2 * u;
+        double err = (2.0 * u * e[0] + e[1]) / (1.0 / (6.0 * kPi * mu_ * rho));
+        if (m_ != Moments::F)
+          err = std::max(err, (std::max(3.0 * u2, 6.0 * u3) * e[0] + std::max(3.0 * u, 6.0 * u2) * e[1] +
+                               std::max(0.5, 3.0 * u) * e[2] + 0.5 * e[3]) /
+                                  self_min(rho, mu_, m_));
+        worst = std::max(worst, err);
+      }
+    if (worst <= table_target_) {
+      intervals_ = nint;
+      inv_h_ = 1.0 / h;
+      table_ = std::move(tab);
+      table_error_ = worst;
+      return;
+    }
+    if (nint >= (1 << 14))
+      throw std::runtime_error("RealSpaceSum: real-space table error " + std::to_string(worst) +
+                               " above the target " + std::to_string(table_target_) + " with " +
+                               std::to_string(nint) + " intervals");
+  }
+}
+
+void RealSpaceSum::update_positions(const std::vector<Vec3>& x) {
+  if (long(x.size()) != n_)
+    throw std::invalid_argument("RealSpaceSum::update_positions: " + std::to_string(x.size()) + " positions for " +
+                                std::to_string(n_) + " particles");
+  set_positions(x);
+}
+
+void RealSpaceSum::set_positions(const std::vector<Vec3>& x) {
+  const long N = n_;
+  const double amax = *std::max_element(radius_.begin(), radius_.end());
+  const double range = cutoff_gap_ + 2.0 * amax;
+  // Cells over fractional coordinates, at least `range` wide between lattice planes
+  // (trees/neighbor_list.hpp); at most about 2 per particle.
+  const Vec3& L = domain_.box;
+  const double gamma = domain_.reduced_strain();
+  const std::array<double, 3> width{L.x() / std::sqrt(1.0 + gamma * gamma), L.y(), L.z()};
+  std::array<int, 3> nc;
+  for (int k = 0; k < 3; ++k) nc[k] = std::max(1, int(std::floor(width[k] / range)));
+  const double cap = std::max(27.0, 2.0 * double(N));
+  while (double(nc[0]) * nc[1] * nc[2] > cap) {
+    int k = 0;
+    for (int q = 1; q < 3; ++q)
+      if (nc[q] > nc[k]) k = q;
+    nc[k] = std::max(1, nc[k] / 2);
+  }
+  const int ncell = nc[0] * nc[1] * nc[2];
+  std::vector<int> cell(N);
+  std::vector<long> start(ncell + 1, 0);
+  for (long i = 0; i < N; ++i) {
+    Vec3 f = domain_.fractional(x[i]);
+    int c[3];
+    for (int k = 0; k < 3; ++k) {
+      f[k] -= std::floor(f[k]);
+      c[k] = std::min(nc[k] - 1, std::max(0, int(f[k] * nc[k])));
+    }
+    cell[i] = (c[2] * nc[1] + c[1]) * nc[0] + c[0];
+    ++start[cell[i] + 1];
+  }
+  for (int c = 0; c < ncell; ++c) start[c + 1] += start[c];
+  order_.resize(N);
+  {
+    std::vector<long> fill(start.begin(), start.end() - 1);
+    for (long i = 0; i < N; ++i) order_[fill[cell[i]]++] = int(i);
+  }
+  std::vector<Vec3> xs(N);
+  std::vector<double> as(N);
+  a2s_.resize(N);
+  self_f_.resize(N);
+  self_t_.resize(N);
+  self_s_.resize(N);
+  for (long k = 0; k < N; ++k) {
+    xs[k] = x[order_[k]];
+    as[k] = radius_[order_[k]];
+    a2s_[k] = as[k] * as[k];
+    self_f_[k] = self0_[3 * order_[k]];
+    self_t_[k] = self0_[3 * order_[k] + 1];
+    self_s_[k] = self0_[3 * order_[k] + 2];
+  }
+  // Stencil offsets per direction; fewer than 3 cells: every cell once.
+  std::array<std::vector<int>, 3> offs;
+  for (int k = 0; k < 3; ++k) offs[k] = nc[k] >= 3 ? std::vector<int>{-1, 0, 1} : (nc[k] == 2 ? std::vector<int>{0, 1} : std::vector<int>{0});
+
+  // Rows: each thread fills a contiguous block of rows; blocks are joined in row order, so the
+  // pair data do not depend on the thread count.
+  struct Block {
+    std::vector<long> count, ocount;
+    std::vector<int> nbr, onbr;
+    std::vector<double> ex, ey, ez, dist, odist;
+    std::vector<Vec3> oe;
+  };
+  std::vector<Block> blocks;
+#pragma omp parallel
+  {
+    const int nt = omp_get_num_threads(), tid = omp_get_thread_num();
+#pragma omp single
+    blocks.resize(nt);
+    Block& b = blocks[tid];
+    const long k0 = N * tid / nt, k1 = N * (tid + 1) / nt;
+    b.count.assign(k1 - k0, 0);
+    b.ocount.assign(k1 - k0, 0);
+    for (long k = k0; k < k1; ++k) {
+      const int ck = cell[order_[k]];
+      const int cx = ck % nc[0], cy = (ck / nc[0]) % nc[1], cz = ck / (nc[0] * nc[1]);
+      const int ok = order_[k];
+      for (int dz : offs[2])
+        for (int dy : offs[1])
+          for (int dx : offs[0]) {
+            const int qx = (cx + dx + nc[0]) % nc[0], qy = (cy + dy + nc[1]) % nc[1], qz = (cz + dz + nc[2]) % nc[2];
+            const int q = (qz * nc[1] + qy) * nc[0] + qx;
+            for (long l = start[q]; l < start[q + 1]; ++l) {
+              if (l == k) continue;
+              const int ol = order_[l];
+              // Same expressions as trees::neighbor_pairs (pair (i, j) with i < j).
+              const double lim = ok < ol ? cutoff_gap_ + radius_[ok] + radius_[ol] : cutoff_gap_ + radius_[ol] + radius_[ok];
+              const Vec3 r = domain_.minimum_image(xs[k] - xs[l]);
+              const double r2 = r.squaredNorm();
+              if (r2 > lim * lim * (1.0 + 1e-10)) continue;
+              const double dist = r.norm();
+              if (!(dist < lim)) continue;
+              if (dist >= as[k] + as[l]) {
+                ++b.count[k - k0];
+                b.nbr.push_back(int(l));
+                b.ex.push_back(r.x() / dist);
+                b.ey.push_back(r.y() / dist);
+                b.ez.push_back(r.z() / dist);
+                b.dist.push_back(dist);
+              } else {
+                ++b.ocount[k - k0];
+                b.onbr.push_back(int(l));
+                b.oe.push_back(dist > 0.0 ? Vec3(r / dist) : Vec3::UnitZ());  // coincident: isotropic block
+                b.odist.push_back(dist);
+              }
+            }
+          }
+    }
+  }
+  row_.assign(N + 1, 0);
+  orow_.assign(N + 1, 0);
+  {
+    long k = 0;
+    for (const Block& b : blocks)
+      for (std::size_t t = 0; t < b.count.size(); ++t, ++k) {
+        row_[k + 1] = row_[k] + b.count[t];
+        orow_[k + 1] = orow_[k] + b.ocount[t];
+      }
+  }
+  const long ns = row_[N], no = orow_[N];
+  nbr_.resize(ns);
+  ex_.resize(ns);
+  ey_.resize(ns);
+  ez_.resize(ns);
+  dist_.resize(ns);
+  overlap_j_.resize(no);
+  overlap_e_.resize(no);
+  overlap_s_.resize(no);
+  std::vector<double> odist(no);
+  {
+    long p = 0, po = 0;
+    for (const Block& b : blocks) {
+      std::copy(b.nbr.begin(), b.nbr.end(), nbr_.begin() + p);
+      std::copy(b.ex.begin(), b.ex.end(), ex_.begin() + p);
+      std::copy(b.ey.begin(), b.ey.end(), ey_.begin() + p);
+      std::copy(b.ez.begin(), b.ez.end(), ez_.begin() + p);
+      std::copy(b.dist.begin(), b.dist.end(), dist_.begin() + p);
+      p += long(b.nbr.size());
+      std::copy(b.onbr.begin(), b.onbr.end(), overlap_j_.begin() + po);
+      std::copy(b.oe.begin(), b.oe.end(), overlap_e_.begin() + po);
+      std::copy(b.odist.begin(), b.odist.end(), odist.begin() + po);
+      po += long(b.onbr.size());
+    }
+  }
+  // Exact scalars of the overlapping and nested pairs.
+#pragma omp parallel for schedule(dynamic, 16)
+  for (long k = 0; k < N; ++k)
+    for (long t = orow_[k]; t < orow_[k + 1]; ++t)
+      overlap_s_[t] = real_scalars(as[k], as[overlap_j_[t]], odist[t], xi_, mu_, m_);
+  pairs_ = std::size_t(ns + no) / 2;
+}
+
+template <Moments M>
+void RealSpaceSum::apply_rows(const double* xs, double* ys) const {
+  constexpr int d = dof_per_particle(M);
+  constexpr int nf = M == Moments::F ? 6 : 12;
+  const double km = 1.0 / (8.0 * kPi * mu_);
+  const double* tab = table_.data();
+  const int last = intervals_ - 1;
+#pragma omp parallel for schedule(dynamic, 32)
+  for (long k = 0; k < n_; ++k) {
+    double y[d];
+    const double* xk = xs + k * d;
+    for (int c = 0; c < 3; ++c) y[c] = self_f_[k] * xk[c];
+    if constexpr (d > 3)
+      for (int c = 3; c < 6; ++c) y[c] = self_t_[k] * xk[c];
+    if constexpr (d > 6)
+      for (int c = 6; c < 11; ++c) y[c] = self_s_[k] * xk[c];
+    const double A = a2s_[k];
+    for (long t = row_[k]; t < row_[k + 1]; ++t) {
+      const int j = nbr_[t];
+      const double r = dist_[t], u = 1.0 / r;
+      const double sidx = (r - r_lo_) * inv_h_;
+      const int idx = std::min(last, std::max(0, int(sidx)));
+      const double tt = 2.0 * (sidx - idx) - 1.0;
+      const double* c = tab + std::size_t(idx) * kCoef * nf;
+      double w[nf];
+      for (int f = 0; f < nf; ++f) w[f] = c[f];
+      for (int lev = 1; lev < kCoef; ++lev)
+        for (int f = 0; f < nf; ++f) w[f] = w[f] * tt + c[lev * nf + f];
+      // B0 = free_0 - W0, B1 = free_1 - W1, B2 = -W2 (derivatives, times 1/(8 pi mu));
+      // free_0 = r, free_1 = 2 / r.
+      const double u2 = u * u, u3 = u2 * u;
+      const double B = a2s_[j], AB = A * B;
+      mobility::PairScalars s;
+      {
+        const double c1 = (A + B) / 6.0, c2 = AB / 36.0;  // ff
+        const double D1 = km - w[0] + c1 * (-2.0 * km * u2 - w[1]) - c2 * w[2];
+        const double D2 = -w[3] + c1 * (4.0 * km * u3 - w[4]) - c2 * w[5];
+        s.xa = 2.0 * D1 * u;
+        s.ya = D2 + D1 * u;
+      }
+      if constexpr (M != Moments::F) {
+        const double u4 = u2 * u2, u5 = u4 * u;
+        const double b0[4] = {km - w[0], -w[3], -w[6], -w[9]};
+        const double b1[4] = {-2.0 * km * u2 - w[1], 4.0 * km * u3 - w[4], -12.0 * km * u4 - w[7], 48.0 * km * u5 - w[10]};
+        const double b2[4] = {-w[2], -w[5], -w[8], -w[11]};
+        auto derivs = [&](double c1, double c2, double* D) {
+          for (int q = 0; q < 4; ++q) D[q] = b0[q] + c1 * b1[q] + c2 * b2[q];
+        };
+        double tf[4], ft[4], tt4[4];
+        derivs(A / 10.0 + B / 6.0, AB / 60.0, tf);
+        derivs(A / 6.0 + B / 10.0, AB / 60.0, ft);
+        derivs((A + B) / 10.0, AB / 100.0, tt4);
+        s.yb = -0.5 * tf[2] - tf[1] * u + tf[0] * u2;
+        s.ybt = -0.5 * ft[2] - ft[1] * u + ft[0] * u2;
+        s.xc = (-0.5 * tt4[2] - tt4[1] * u + tt4[0] * u2) * u;
+        s.yc = -0.25 * tt4[3] - 0.75 * tt4[2] * u + 0.5 * tt4[1] * u2 - 0.5 * tt4[0] * u3;
+        if constexpr (M == Moments::FTS) {
+          s.xg = 3.0 * (tf[1] - tf[0] * u) * u;
+          s.yg = 0.5 * tf[2];
+          s.xgt = -3.0 * (ft[1] - ft[0] * u) * u;
+          s.ygt = -0.5 * ft[2];
+          s.yh = s.yht = 0.25 * (-tt4[3] - tt4[2] * u + 6.0 * tt4[1] * u2 - 6.0 * tt4[0] * u3);
+          s.xm = 3.0 * (-tt4[2] * u + 2.0 * tt4[1] * u2 - 2.0 * tt4[0] * u3);
+          s.ym = -0.5 * tt4[3] + 0.5 * tt4[2] * u - 3.0 * tt4[1] * u2 + 3.0 * tt4[0] * u3;
+          s.zm = -tt4[2] * u;
+        }
+      }
+      apply_block<M>(s, ex_[t], ey_[t], ez_[t], xs + std::size_t(j) * d, y);
+    }
+    for (long t = orow_[k]; t < orow_[k + 1]; ++t) {
+      const Vec3& e = overlap_e_[t];
+      apply_block<M>(overlap_s_[t], e.x(), e.y(), e.z(), xs + std::size_t(overlap_j_[t]) * d, y);
+    }
+    for (int c = 0; c < d; ++c) ys[k * d + c] = y[c];
+  }
+}
+
+void RealSpaceSum::apply(const VecX& in, VecX& out) const {
+  if (in.size() != size())
+    throw std::invalid_argument("RealSpaceSum::apply: input of size " + std::to_string(in.size()) + ", expected " +
+                                std::to_string(size()));
+  const int d = dof_per_particle(m_);
+  std::vector<double> xs(std::size_t(n_) * d), ys(std::size_t(n_) * d);
+#pragma omp parallel for schedule(static)
+  for (long k = 0; k < n_; ++k)
+    for (int c = 0; c < d; ++c) xs[std::size_t(k) * d + c] = in[Eigen::Index(order_[k]) * d + c];
+  if (m_ == Moments::F)
+    apply_rows<Moments::F>(xs.data(), ys.data());
+  else if (m_ == Moments::FT)
+    apply_rows<Moments::FT>(xs.data(), ys.data());
+  else
+    apply_rows<Moments::FTS>(xs.data(), ys.data());
+  out.resize(size());
+#pragma omp parallel for schedule(static)
+  for (long k = 0; k < n_; ++k)
+    for (int c = 0; c < d; ++c) out[Eigen::Index(order_[k]) * d + c] = ys[std::size_t(k) * d + c];
+}
+
+}  // namespace stokesian::ewald

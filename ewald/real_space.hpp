@@ -1,0 +1,108 @@
+#pragma once
+// Real-space part of the Ewald-split periodic grand mobility, fast form (docs/ewald.md s.2):
+//     y_a = S_a x_a + sum_{b : |r_ab| < cutoff_gap + a_a + a_b} M^real_ab(r_ab) x_b,
+// r_ab = x_a - x_b the minimum image, S_a = self_correction(a_a) (ewald_split.hpp), M^real the
+// blocks of real_scalars. This is the product PmeFarField::apply_real computes; the pair set is
+// that of trees::neighbor_pairs (same contract: boxes with cutoff_gap + 2 a_max > min(L) / 2 are
+// rejected).
+//
+// Tabulation. For a separated pair (r >= a_a + a_b) the real part of 8 pi mu Psi is
+//     R = (r + 2 c1 / r) - (W0 + c1 W1 + c2 W2)
+// for each kind pair (ff, tf, ft, tt), c1 = w_a a_a^2 + w_b a_b^2, c2 = w_a a_a^2 w_b a_b^2
+// (w = 1/6 force kind, 1/10 torque/stresslet kind; ewald_split.hpp). Every scalar is a fixed
+// linear form in the radial derivatives d1..d4 of Psi divided by powers of r
+// (mobility::scalars_from_derivatives), so the whole pair follows from the twelve functions
+// d_k W_j(r) (k = 1..4, j = 0..2; F needs only k = 1, 2), whatever the radii. The W_j are even entire
+// functions of r (no singularity, scale 1/xi), so they are tabulated on [r_lo, r_hi] =
+// [2 a_min, cutoff_gap + 2 a_max] as piecewise polynomials of degree 7 (Chebyshev interpolation in
+// each interval, stored as monomials in the local variable t in [-1, 1]); the free part r + 2 c1/r is
+// evaluated exactly. Overlapping and nested pairs (r < a_a + a_b) keep the exact real_scalars,
+// computed once per position update.
+//
+// Table accuracy. The intervals are halved until, on 9 sample points per interval (against the
+// closed forms in long double; Taylor series below xi r = 0.5), the error of every pair scalar is
+// bounded by
+//     eps_table = max(1e-4 tol, 1e-15) x (self mobility of a sphere of radius rho = min(a_max, r/2))
+// (the U <- F scalars against the translational self mobility, all others against the smallest
+// self mobility of the moments). The bound adds the errors of d_k W_j times c1_max, c2_max (a
+// separated pair at distance r has a_a + a_b <= r, so c1 <= min(r^2, 2 a_max^2)/6,
+// c2 <= rho^4/36, and its smaller sphere has radius <= rho) times the largest multiplier of d_k in
+// the scalars (mobility::scalars_from_derivatives). table_error() returns the measured bound in
+// units of that self mobility. Summed over the neighbours of a particle these errors stay orders
+// of magnitude below tol (tested: relative 2-norm error <= 1e-3 tol).
+// Speed. Particles are binned in cells over fractional coordinates (Lees-Edwards aware, as
+// trees/neighbor_list.hpp) and renumbered cell by cell; inputs are gathered into that order, each
+// sorted particle gathers its own row from contiguous structure-of-arrays pair data (neighbour,
+// unit vector, distance), and the result is scattered back. Each row is summed by one thread in a
+// fixed order, so the result is bitwise independent of the number of OpenMP threads.
+#include "engine/core/domain.hpp"
+#include "engine/core/types.hpp"
+#include "engine/kernels/mobility_pair.hpp"
+
+#include <cstddef>
+#include <vector>
+
+namespace stokesian::ewald {
+
+class RealSpaceSum {
+ public:
+  RealSpaceSum() = default;
+  // x, a: N positions and radii [a]; domain periodic (any strain); cutoff_gap > 0 [a]; xi > 0 [1/a];
+  // mu > 0; tolerance in [1e-14, 0.1] (the PME tolerance, sets the table accuracy). Throws
+  // std::invalid_argument on bad input or a box smaller than twice the interaction range.
+  RealSpaceSum(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain, double cutoff_gap,
+               double xi, double mu, Moments m, double tolerance);
+
+  // New positions of the same particles (same radii, box, strain): rebuilds the cell order and
+  // the pair data, keeps the tables and self terms. The result equals a new object's.
+  void update_positions(const std::vector<Vec3>& x);
+
+  // out = real-space sum + self term (overwritten), size N * dof_per_particle(m).
+  void apply(const VecX& in, VecX& out) const;
+
+  Eigen::Index size() const { return Eigen::Index(n_) * dof_per_particle(m_); }
+  Moments moments() const { return m_; }
+  std::size_t pairs() const { return pairs_; }              // unordered pairs within the cutoff
+  std::size_t overlapping_pairs() const { return overlap_j_.size() / 2; }
+  int table_intervals() const { return intervals_; }
+  double table_error() const { return table_error_; }     // measured, relative (see header)
+  double table_target() const { return table_target_; }   // max(1e-4 tol, 1e-15)
+
+ private:
+  void build_table(double tolerance);
+  void set_positions(const std::vector<Vec3>& x);
+  template <Moments M>
+  void apply_rows(const double* xs, double* ys) const;
+
+  long n_ = 0;
+  Moments m_ = Moments::F;
+  Domain domain_;
+  double cutoff_gap_ = 0.0, xi_ = 1.0, mu_ = 1.0;
+  std::vector<double> radius_;  // original order
+  std::vector<double> self0_;   // self-term coefficients F, T, S per particle, original order
+
+  // Tables: intervals_ intervals of width h on [r_lo, r_hi]; per interval, kCoef levels (highest
+  // power first) of nf_ functions (k-major: d1 W0, d1 W1, d1 W2, d2 W0, ...), already times 1/(8 pi mu).
+  static constexpr int kCoef = 8;
+  int intervals_ = 0, nf_ = 0;
+  double r_lo_ = 0.0, inv_h_ = 0.0;
+  std::vector<double> table_;
+  double table_error_ = 0.0, table_target_ = 0.0;
+
+  // Sorted order (cell by cell): order_[k] = original index of sorted particle k.
+  std::vector<int> order_;
+  std::vector<double> a2s_;                  // sorted radii squared
+  std::vector<double> self_f_, self_t_, self_s_;  // sorted self-term coefficients
+  // Separated entries of sorted row k: [row_[k], row_[k+1]), structure of arrays.
+  std::vector<long> row_;
+  std::vector<int> nbr_;
+  std::vector<double> ex_, ey_, ez_, dist_;
+  // Overlapping/nested entries: [orow_[k], orow_[k+1]), exact scalars.
+  std::vector<long> orow_;
+  std::vector<int> overlap_j_;
+  std::vector<Vec3> overlap_e_;
+  std::vector<mobility::PairScalars> overlap_s_;
+  std::size_t pairs_ = 0;
+};
+
+}  // namespace stokesian::ewald
