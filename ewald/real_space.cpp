@@ -75,6 +75,9 @@ void wave_derivatives(LD r, LD xi, std::array<std::array<LD, 4>, 3>& d) {
           -xi4 * xi3 * (-128.0L * x3 * x3 + 1216.0L * x2 * x2 - 2208.0L * x2 + 432.0L) * E};
 }
 
+// Scalars kept per cached entry (yht = yh): xa ya | yb ybt xc yc | xg yg xgt ygt yh xm ym zm.
+constexpr int cached_scalars(Moments m) { return m == Moments::F ? 2 : (m == Moments::FT ? 6 : 14); }
+
 // Smallest self mobility (of the moments in m) of a sphere of radius a.
 double self_min(double a, double mu, Moments m) {
   double s = 1.0 / (6.0 * kPi * mu * a);
@@ -142,8 +145,16 @@ inline void apply_block(const mobility::PairScalars& s, double ex, double ey, do
 }  // namespace
 
 RealSpaceSum::RealSpaceSum(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain,
-                           double cutoff_gap, double xi, double mu, Moments m, double tolerance)
-    : n_(long(x.size())), m_(m), domain_(domain), cutoff_gap_(cutoff_gap), xi_(xi), mu_(mu), radius_(a) {
+                           double cutoff_gap, double xi, double mu, Moments m, double tolerance,
+                           std::size_t cache_bytes)
+    : n_(long(x.size())),
+      m_(m),
+      domain_(domain),
+      cutoff_gap_(cutoff_gap),
+      xi_(xi),
+      mu_(mu),
+      radius_(a),
+      cache_bytes_(cache_bytes) {
   if (x.empty() || x.size() != a.size())
     throw std::invalid_argument("RealSpaceSum: " + std::to_string(x.size()) + " positions and " +
                                 std::to_string(a.size()) + " radii (need equal, non-zero counts)");
@@ -416,15 +427,135 @@ void RealSpaceSum::set_positions(const std::vector<Vec3>& x) {
     for (long t = orow_[k]; t < orow_[k + 1]; ++t)
       overlap_s_[t] = real_scalars(as[k], as[overlap_j_[t]], odist[t], xi_, mu_, m_);
   pairs_ = std::size_t(ns + no) / 2;
+  // Scalars of the separated entries, kept when they fit in the budget.
+  cache_.clear();
+  cache_.shrink_to_fit();
+  if (double(ns) * cached_scalars(m_) * sizeof(double) <= double(cache_bytes_)) {
+    if (m_ == Moments::F)
+      fill_cache<Moments::F>();
+    else if (m_ == Moments::FT)
+      fill_cache<Moments::FT>();
+    else
+      fill_cache<Moments::FTS>();
+  }
+}
+
+template <Moments M>
+mobility::PairScalars RealSpaceSum::table_scalars(double A, double B, double r) const {
+  constexpr int nf = M == Moments::F ? 6 : 12;
+  const double km = 1.0 / (8.0 * kPi * mu_), u = 1.0 / r;
+  const double sidx = (r - r_lo_) * inv_h_;
+  const int idx = std::min(intervals_ - 1, std::max(0, int(sidx)));
+  const double tt = 2.0 * (sidx - idx) - 1.0;
+  const double* c = table_.data() + std::size_t(idx) * kCoef * nf;
+  double w[nf];
+  for (int f = 0; f < nf; ++f) w[f] = c[f];
+  for (int lev = 1; lev < kCoef; ++lev)
+    for (int f = 0; f < nf; ++f) w[f] = w[f] * tt + c[lev * nf + f];
+  // Derivatives of Psi = B0 + c1 B1 + c2 B2 with B0 = r - W0, B1 = 2 / r - W1, B2 = -W2 (times
+  // 1/(8 pi mu)); c1, c2 of the kind pair (alpha = this row, radius^2 A; beta radius^2 B).
+  const double u2 = u * u, u3 = u2 * u, AB = A * B;
+  mobility::PairScalars s;
+  {
+    const double c1 = (A + B) / 6.0, c2 = AB / 36.0;  // ff
+    const double D1 = km - w[0] + c1 * (-2.0 * km * u2 - w[1]) - c2 * w[2];
+    const double D2 = -w[3] + c1 * (4.0 * km * u3 - w[4]) - c2 * w[5];
+    s.xa = 2.0 * D1 * u;
+    s.ya = D2 + D1 * u;
+  }
+  if constexpr (M != Moments::F) {
+    const double u4 = u2 * u2, u5 = u4 * u;
+    const double b0[4] = {km - w[0], -w[3], -w[6], -w[9]};
+    const double b1[4] = {-2.0 * km * u2 - w[1], 4.0 * km * u3 - w[4], -12.0 * km * u4 - w[7], 48.0 * km * u5 - w[10]};
+    const double b2[4] = {-w[2], -w[5], -w[8], -w[11]};
+    auto derivs = [&](double c1, double c2, double* D) {
+      for (int q = 0; q < 4; ++q) D[q] = b0[q] + c1 * b1[q] + c2 * b2[q];
+    };
+    double tf[4], ft[4], t4[4];
+    derivs(A / 10.0 + B / 6.0, AB / 60.0, tf);
+    derivs(A / 6.0 + B / 10.0, AB / 60.0, ft);
+    derivs((A + B) / 10.0, AB / 100.0, t4);
+    // mobility::scalars_from_derivatives, written with u = 1/r.
+    s.yb = -0.5 * tf[2] - tf[1] * u + tf[0] * u2;
+    s.ybt = -0.5 * ft[2] - ft[1] * u + ft[0] * u2;
+    s.xc = (-0.5 * t4[2] - t4[1] * u + t4[0] * u2) * u;
+    s.yc = -0.25 * t4[3] - 0.75 * t4[2] * u + 0.5 * t4[1] * u2 - 0.5 * t4[0] * u3;
+    if constexpr (M == Moments::FTS) {
+      s.xg = 3.0 * (tf[1] - tf[0] * u) * u;
+      s.yg = 0.5 * tf[2];
+      s.xgt = -3.0 * (ft[1] - ft[0] * u) * u;
+      s.ygt = -0.5 * ft[2];
+      s.yh = s.yht = 0.25 * (-t4[3] - t4[2] * u + 6.0 * t4[1] * u2 - 6.0 * t4[0] * u3);
+      s.xm = 3.0 * (-t4[2] * u + 2.0 * t4[1] * u2 - 2.0 * t4[0] * u3);
+      s.ym = -0.5 * t4[3] + 0.5 * t4[2] * u - 3.0 * t4[1] * u2 + 3.0 * t4[0] * u3;
+      s.zm = -t4[2] * u;
+    }
+  }
+  return s;
+}
+
+namespace {
+template <Moments M>
+inline void store(const mobility::PairScalars& s, double* c, long stride) {
+  c[0] = s.xa;
+  c[stride] = s.ya;
+  if constexpr (M != Moments::F) {
+    c[2 * stride] = s.yb;
+    c[3 * stride] = s.ybt;
+    c[4 * stride] = s.xc;
+    c[5 * stride] = s.yc;
+  }
+  if constexpr (M == Moments::FTS) {
+    c[6 * stride] = s.xg;
+    c[7 * stride] = s.yg;
+    c[8 * stride] = s.xgt;
+    c[9 * stride] = s.ygt;
+    c[10 * stride] = s.yh;
+    c[11 * stride] = s.xm;
+    c[12 * stride] = s.ym;
+    c[13 * stride] = s.zm;
+  }
+}
+template <Moments M>
+inline mobility::PairScalars load(const double* c, long stride) {
+  mobility::PairScalars s;
+  s.xa = c[0];
+  s.ya = c[stride];
+  if constexpr (M != Moments::F) {
+    s.yb = c[2 * stride];
+    s.ybt = c[3 * stride];
+    s.xc = c[4 * stride];
+    s.yc = c[5 * stride];
+  }
+  if constexpr (M == Moments::FTS) {
+    s.xg = c[6 * stride];
+    s.yg = c[7 * stride];
+    s.xgt = c[8 * stride];
+    s.ygt = c[9 * stride];
+    s.yh = s.yht = c[10 * stride];
+    s.xm = c[11 * stride];
+    s.ym = c[12 * stride];
+    s.zm = c[13 * stride];
+  }
+  return s;
+}
+}  // namespace
+
+template <Moments M>
+void RealSpaceSum::fill_cache() {
+  const long ns = row_[n_], stride = ns;
+  cache_.assign(std::size_t(ns) * cached_scalars(M), 0.0);
+#pragma omp parallel for schedule(dynamic, 64)
+  for (long k = 0; k < n_; ++k)
+    for (long t = row_[k]; t < row_[k + 1]; ++t)
+      store<M>(table_scalars<M>(a2s_[k], a2s_[nbr_[t]], dist_[t]), cache_.data() + t, stride);
 }
 
 template <Moments M>
 void RealSpaceSum::apply_rows(const double* xs, double* ys) const {
   constexpr int d = dof_per_particle(M);
-  constexpr int nf = M == Moments::F ? 6 : 12;
-  const double km = 1.0 / (8.0 * kPi * mu_);
-  const double* tab = table_.data();
-  const int last = intervals_ - 1;
+  const bool cached = !cache_.empty();
+  const long stride = row_[n_];
 #pragma omp parallel for schedule(dynamic, 32)
   for (long k = 0; k < n_; ++k) {
     double y[d];
@@ -434,58 +565,14 @@ void RealSpaceSum::apply_rows(const double* xs, double* ys) const {
       for (int c = 3; c < 6; ++c) y[c] = self_t_[k] * xk[c];
     if constexpr (d > 6)
       for (int c = 6; c < 11; ++c) y[c] = self_s_[k] * xk[c];
-    const double A = a2s_[k];
-    for (long t = row_[k]; t < row_[k + 1]; ++t) {
-      const int j = nbr_[t];
-      const double r = dist_[t], u = 1.0 / r;
-      const double sidx = (r - r_lo_) * inv_h_;
-      const int idx = std::min(last, std::max(0, int(sidx)));
-      const double tt = 2.0 * (sidx - idx) - 1.0;
-      const double* c = tab + std::size_t(idx) * kCoef * nf;
-      double w[nf];
-      for (int f = 0; f < nf; ++f) w[f] = c[f];
-      for (int lev = 1; lev < kCoef; ++lev)
-        for (int f = 0; f < nf; ++f) w[f] = w[f] * tt + c[lev * nf + f];
-      // B0 = free_0 - W0, B1 = free_1 - W1, B2 = -W2 (derivatives, times 1/(8 pi mu));
-      // free_0 = r, free_1 = 2 / r.
-      const double u2 = u * u, u3 = u2 * u;
-      const double B = a2s_[j], AB = A * B;
-      mobility::PairScalars s;
-      {
-        const double c1 = (A + B) / 6.0, c2 = AB / 36.0;  // ff
-        const double D1 = km - w[0] + c1 * (-2.0 * km * u2 - w[1]) - c2 * w[2];
-        const double D2 = -w[3] + c1 * (4.0 * km * u3 - w[4]) - c2 * w[5];
-        s.xa = 2.0 * D1 * u;
-        s.ya = D2 + D1 * u;
-      }
-      if constexpr (M != Moments::F) {
-        const double u4 = u2 * u2, u5 = u4 * u;
-        const double b0[4] = {km - w[0], -w[3], -w[6], -w[9]};
-        const double b1[4] = {-2.0 * km * u2 - w[1], 4.0 * km * u3 - w[4], -12.0 * km * u4 - w[7], 48.0 * km * u5 - w[10]};
-        const double b2[4] = {-w[2], -w[5], -w[8], -w[11]};
-        auto derivs = [&](double c1, double c2, double* D) {
-          for (int q = 0; q < 4; ++q) D[q] = b0[q] + c1 * b1[q] + c2 * b2[q];
-        };
-        double tf[4], ft[4], tt4[4];
-        derivs(A / 10.0 + B / 6.0, AB / 60.0, tf);
-        derivs(A / 6.0 + B / 10.0, AB / 60.0, ft);
-        derivs((A + B) / 10.0, AB / 100.0, tt4);
-        s.yb = -0.5 * tf[2] - tf[1] * u + tf[0] * u2;
-        s.ybt = -0.5 * ft[2] - ft[1] * u + ft[0] * u2;
-        s.xc = (-0.5 * tt4[2] - tt4[1] * u + tt4[0] * u2) * u;
-        s.yc = -0.25 * tt4[3] - 0.75 * tt4[2] * u + 0.5 * tt4[1] * u2 - 0.5 * tt4[0] * u3;
-        if constexpr (M == Moments::FTS) {
-          s.xg = 3.0 * (tf[1] - tf[0] * u) * u;
-          s.yg = 0.5 * tf[2];
-          s.xgt = -3.0 * (ft[1] - ft[0] * u) * u;
-          s.ygt = -0.5 * ft[2];
-          s.yh = s.yht = 0.25 * (-tt4[3] - tt4[2] * u + 6.0 * tt4[1] * u2 - 6.0 * tt4[0] * u3);
-          s.xm = 3.0 * (-tt4[2] * u + 2.0 * tt4[1] * u2 - 2.0 * tt4[0] * u3);
-          s.ym = -0.5 * tt4[3] + 0.5 * tt4[2] * u - 3.0 * tt4[1] * u2 + 3.0 * tt4[0] * u3;
-          s.zm = -tt4[2] * u;
-        }
-      }
-      apply_block<M>(s, ex_[t], ey_[t], ez_[t], xs + std::size_t(j) * d, y);
+    if (cached) {
+      for (long t = row_[k]; t < row_[k + 1]; ++t)
+        apply_block<M>(load<M>(cache_.data() + t, stride), ex_[t], ey_[t], ez_[t], xs + std::size_t(nbr_[t]) * d, y);
+    } else {
+      const double A = a2s_[k];
+      for (long t = row_[k]; t < row_[k + 1]; ++t)
+        apply_block<M>(table_scalars<M>(A, a2s_[nbr_[t]], dist_[t]), ex_[t], ey_[t], ez_[t],
+                       xs + std::size_t(nbr_[t]) * d, y);
     }
     for (long t = orow_[k]; t < orow_[k + 1]; ++t) {
       const Vec3& e = overlap_e_[t];
