@@ -44,7 +44,8 @@
 //           (smallest P whose derivative errors at the value-optimal t are <= tol; 0: none)
 //   kind 2  spreading cost: P, N, grid, spread, gather (seconds), c_s (s per particle per P^3)
 //   kind 3  FFT cost: M, r2c, c2r (seconds per field), c_f (s per M^3 log2 M^3, 3 fields)
-//   kind 4  window evaluation: window, ns_per_point
+//   kind 4  window evaluation: window, P, degree, ns_per_point (formula), poly_ns_per_point,
+//           poly_max_dev (piecewise polynomial of that degree)
 //   kind 5  checks: what (0 ES quadrature kQuadNodes vs 2 kQuadNodes, 1 KB closed form vs
 //           quadrature, 2 FFT grid pipeline vs the direct pair formula), window, value (max rel. diff)
 //   kind 6  cost-model choice: rho = N / (2 n_max)^3, tol, window, sigma, P, cost (s, 3D, n_max = 32)
@@ -383,6 +384,39 @@ double fft_pipeline_check(const Window& w, int n_max, int M, double tol, const Q
   return worst;
 }
 
+// Piecewise polynomial form of a window: on each of the P unit intervals of the support a
+// polynomial of degree D in t in [-1, 1], interpolating phi at D + 1 Chebyshev points (power
+// coefficients from the small Vandermonde system). A particle whose first grid point is at
+// d_0 = -P/2 + u (u in [0, 1)) gets its P weights phi(d_0 + j) from t = 2 u - 1 by P Horner
+// sums of D + 1 terms, the same cost for every window.
+struct PiecewisePoly {
+  int P, D;
+  std::vector<double> c;  // c[k * P + j]: coefficient of t^k on interval j
+};
+PiecewisePoly fit_poly(const Window& w, int D) {
+  PiecewisePoly pp{w.P, D, std::vector<double>(std::size_t(w.P) * (D + 1))};
+  std::vector<double> t(D + 1);
+  Eigen::MatrixXd V(D + 1, D + 1);
+  for (int r = 0; r <= D; ++r) {
+    t[r] = std::cos(kPi * (r + 0.5) / (D + 1));
+    for (int k = 0; k <= D; ++k) V(r, k) = std::pow(t[r], k);
+  }
+  const auto lu = V.partialPivLu();
+  for (int j = 0; j < w.P; ++j) {
+    Eigen::VectorXd f(D + 1);
+    for (int r = 0; r <= D; ++r) f[r] = phi(w, -0.5 * w.P + j + 0.5 * (t[r] + 1));
+    const Eigen::VectorXd cj = lu.solve(f);
+    for (int k = 0; k <= D; ++k) pp.c[std::size_t(k) * w.P + j] = cj[k];
+  }
+  return pp;
+}
+void eval_poly(const PiecewisePoly& pp, double u, double* out) {
+  const double t = 2 * u - 1;
+  for (int j = 0; j < pp.P; ++j) out[j] = pp.c[std::size_t(pp.D) * pp.P + j];
+  for (int k = pp.D - 1; k >= 0; --k)
+    for (int j = 0; j < pp.P; ++j) out[j] = out[j] * t + pp.c[std::size_t(k) * pp.P + j];
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -491,22 +525,45 @@ int main(int argc, char** argv) {
     }
   }
 
-  // --- kind 4: window evaluation cost ------------------------------------------------------------
+  // --- kind 4: window evaluation cost (P = 8, beta = 2.3 P; a Gaussian exp(-beta z^2) for timing) --
+  // direct formulas (std::exp, std::sqrt, std::cyl_bessel_i) and the piecewise polynomial of
+  // degree D = P + 4 (its max deviation from the formula is recorded).
   {
-    const int n = quick ? 200000 : 2000000;
-    std::vector<double> z(n);
+    const int n = quick ? 200000 : 2000000, P = 8, D = P + 4;
+    std::vector<double> z(n), u(n / P);
     for (double& x : z) x = 2 * uni(rng) - 1;
+    for (double& x : u) x = uni(rng);
     for (int kind : {kGauss, kES, kKB}) {
-      const Window w{kind, 8, 2.3 * 8};
+      const Window w{kind, P, 2.3 * P};
       volatile double sink = 0;
       const double t = bench::median_time([&] {
         double acc = 0;
         for (int i = 0; i < n; ++i) acc += shape(w, z[i]);
         sink = acc;
       }, 3);
+      const PiecewisePoly pp = fit_poly(w, D);
+      double out[64];
+      const double tp = bench::median_time([&] {
+        double acc = 0;
+        for (double x : u) {
+          eval_poly(pp, x, out);
+          for (int j = 0; j < P; ++j) acc += out[j];
+        }
+        sink = acc;
+      }, 3);
       (void)sink;
-      std::printf("window evaluation %-8s: %.1f ns per point\n", kNames[kind], 1e9 * t / n);
-      res.add({{"kind", 4}, {"window", kind}, {"ns_per_point", 1e9 * t / n}}, {{"time", t}});
+      double dev = 0;
+      for (int i = 0; i < 20000; ++i) {
+        const double x = uni(rng);
+        eval_poly(pp, x, out);
+        for (int j = 0; j < P; ++j) dev = std::max(dev, std::abs(out[j] - phi(w, -0.5 * P + j + x)));
+      }
+      const double np = double(u.size()) * P;
+      std::printf("window evaluation %-8s: %.1f ns per point (formula), %.2f ns (piecewise degree %d, max dev %.1e)\n",
+                  kNames[kind], 1e9 * t / n, 1e9 * tp / np, D, dev);
+      res.add({{"kind", 4}, {"window", kind}, {"P", P}, {"degree", D}, {"ns_per_point", 1e9 * t / n},
+               {"poly_ns_per_point", 1e9 * tp / np}, {"poly_max_dev", dev}},
+              {{"time", t}, {"poly_time", tp}});
     }
   }
 
