@@ -11,6 +11,14 @@
 #include <stdexcept>
 #include <string>
 
+#if defined(__x86_64__) && defined(__GNUC__)
+#define STOKESIAN_RS_INLINE inline __attribute__((always_inline))
+#define STOKESIAN_RS_AVX2 __attribute__((target("avx2,fma")))
+#else
+#define STOKESIAN_RS_INLINE inline
+#define STOKESIAN_RS_AVX2
+#endif
+
 namespace stokesian::ewald {
 namespace {
 
@@ -88,7 +96,7 @@ double self_min(double a, double mu, Moments m) {
 
 // y += (block with scalars s, unit vector e) x for one source particle; layout [F T S] / [U W E].
 template <Moments M>
-inline void apply_block(const mobility::PairScalars& s, double ex, double ey, double ez, const double* x, double* y) {
+STOKESIAN_RS_INLINE void apply_block(const mobility::PairScalars& s, double ex, double ey, double ez, const double* x, double* y) {
   const double Fx = x[0], Fy = x[1], Fz = x[2];
   const double eF = ex * Fx + ey * Fy + ez * Fz;
   const double cF = (s.xa - s.ya) * eF;
@@ -176,12 +184,20 @@ RealSpaceSum::RealSpaceSum(const std::vector<Vec3>& x, const std::vector<double>
                                 "; the minimum-image pair list cannot represent this box");
   build_table(tolerance);
   self0_.resize(3 * a.size());
-#pragma omp parallel for schedule(static)
-  for (long i = 0; i < n_; ++i) {
-    const mobility::PairScalars sc = self_correction(a[i], xi_, mu_);
-    self0_[3 * i] = sc.xa;
-    self0_[3 * i + 1] = sc.xc;
-    self0_[3 * i + 2] = sc.xm;
+#pragma omp parallel
+  {
+    double last = -1.0;  // radius of this thread's previous evaluation (monodisperse: one evaluation)
+    mobility::PairScalars sc;
+#pragma omp for schedule(static)
+    for (long i = 0; i < n_; ++i) {
+      if (a[i] != last) {
+        sc = self_correction(a[i], xi_, mu_);
+        last = a[i];
+      }
+      self0_[3 * i] = sc.xa;
+      self0_[3 * i + 1] = sc.xc;
+      self0_[3 * i + 2] = sc.xm;
+    }
   }
   set_positions(x);
 }
@@ -298,6 +314,7 @@ void RealSpaceSum::set_positions(const std::vector<Vec3>& x) {
   const int ncell = nc[0] * nc[1] * nc[2];
   std::vector<int> cell(N);
   std::vector<long> start(ncell + 1, 0);
+  std::vector<Vec3> fw(N);  // wrapped fractional coordinates
   for (long i = 0; i < N; ++i) {
     Vec3 f = domain_.fractional(x[i]);
     int c[3];
@@ -305,6 +322,7 @@ void RealSpaceSum::set_positions(const std::vector<Vec3>& x) {
       f[k] -= std::floor(f[k]);
       c[k] = std::min(nc[k] - 1, std::max(0, int(f[k] * nc[k])));
     }
+    fw[i] = f;
     cell[i] = (c[2] * nc[1] + c[1]) * nc[0] + c[0];
     ++start[cell[i] + 1];
   }
@@ -316,6 +334,18 @@ void RealSpaceSum::set_positions(const std::vector<Vec3>& x) {
   }
   std::vector<Vec3> xs(N);
   std::vector<double> as(N);
+  // Wrapped Cartesian positions A s (sorted): with 3 or more cells per direction the image of a
+  // stencil cell is A (s + wrap), which gives a cheap pre-test before the exact minimum image.
+  const Mat3 lat = domain_.lattice();
+  std::vector<double> wx(N), wy(N), wz(N);
+  for (long k = 0; k < N; ++k) {
+    const Vec3 w = lat * fw[order_[k]];
+    wx[k] = w.x();
+    wy[k] = w.y();
+    wz[k] = w.z();
+  }
+  const bool pretest = nc[0] >= 3 && nc[1] >= 3 && nc[2] >= 3;
+  const double slack = 1e-9 * (L.maxCoeff() + range);  // far above the rounding of A s
   a2s_.resize(N);
   self_f_.resize(N);
   self_t_.resize(N);
@@ -357,13 +387,20 @@ void RealSpaceSum::set_positions(const std::vector<Vec3>& x) {
       for (int dz : offs[2])
         for (int dy : offs[1])
           for (int dx : offs[0]) {
-            const int qx = (cx + dx + nc[0]) % nc[0], qy = (cy + dy + nc[1]) % nc[1], qz = (cz + dz + nc[2]) % nc[2];
+            const int px = cx + dx, py = cy + dy, pz = cz + dz;
+            const int qx = (px + nc[0]) % nc[0], qy = (py + nc[1]) % nc[1], qz = (pz + nc[2]) % nc[2];
             const int q = (qz * nc[1] + qy) * nc[0] + qx;
+            const Vec3 shift = lat * Vec3((px > qx) - (px < qx), (py > qy) - (py < qy), (pz > qz) - (pz < qz));
             for (long l = start[q]; l < start[q + 1]; ++l) {
               if (l == k) continue;
               const int ol = order_[l];
               // Same expressions as trees::neighbor_pairs (pair (i, j) with i < j).
               const double lim = ok < ol ? cutoff_gap_ + radius_[ok] + radius_[ol] : cutoff_gap_ + radius_[ol] + radius_[ok];
+              if (pretest) {
+                const double qx2 = wx[k] - wx[l] - shift.x(), qy2 = wy[k] - wy[l] - shift.y(),
+                             qz2 = wz[k] - wz[l] - shift.z(), pad = lim + slack;
+                if (qx2 * qx2 + qy2 * qy2 + qz2 * qz2 > pad * pad) continue;
+              }
               const Vec3 r = domain_.minimum_image(xs[k] - xs[l]);
               const double r2 = r.squaredNorm();
               if (r2 > lim * lim * (1.0 + 1e-10)) continue;
@@ -441,7 +478,7 @@ void RealSpaceSum::set_positions(const std::vector<Vec3>& x) {
 }
 
 template <Moments M>
-mobility::PairScalars RealSpaceSum::table_scalars(double A, double B, double r) const {
+STOKESIAN_RS_INLINE mobility::PairScalars RealSpaceSum::table_scalars(double A, double B, double r) const {
   constexpr int nf = M == Moments::F ? 6 : 12;
   const double km = 1.0 / (8.0 * kPi * mu_), u = 1.0 / r;
   const double sidx = (r - r_lo_) * inv_h_;
@@ -496,7 +533,7 @@ mobility::PairScalars RealSpaceSum::table_scalars(double A, double B, double r) 
 
 namespace {
 template <Moments M>
-inline void store(const mobility::PairScalars& s, double* c, long stride) {
+STOKESIAN_RS_INLINE void store(const mobility::PairScalars& s, double* c, long stride) {
   c[0] = s.xa;
   c[stride] = s.ya;
   if constexpr (M != Moments::F) {
@@ -517,7 +554,7 @@ inline void store(const mobility::PairScalars& s, double* c, long stride) {
   }
 }
 template <Moments M>
-inline mobility::PairScalars load(const double* c, long stride) {
+STOKESIAN_RS_INLINE mobility::PairScalars load(const double* c, long stride) {
   mobility::PairScalars s;
   s.xa = c[0];
   s.ya = c[stride];
@@ -541,44 +578,93 @@ inline mobility::PairScalars load(const double* c, long stride) {
 }
 }  // namespace
 
+// The row kernels below are compiled twice, for the baseline x86-64 target and for AVX2 + FMA, and
+// chosen once at run time (same choice for the cache fill and the product, so cached and uncached
+// products give the same bits on a given machine).
+static bool use_avx2() {
+#if defined(__x86_64__) && defined(__GNUC__)
+  static const bool yes = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  return yes;
+#else
+  return false;
+#endif
+}
+
+template <Moments M>
+STOKESIAN_RS_INLINE void RealSpaceSum::fill_row(long k) {
+  const long stride = row_[n_];
+  for (long t = row_[k]; t < row_[k + 1]; ++t)
+    store<M>(table_scalars<M>(a2s_[k], a2s_[nbr_[t]], dist_[t]), cache_.data() + t, stride);
+}
+
+template <Moments M>
+STOKESIAN_RS_INLINE void RealSpaceSum::row(long k, const double* xs, double* ys) const {
+  constexpr int d = dof_per_particle(M);
+  const long stride = row_[n_];
+  double y[d];
+  const double* xk = xs + k * d;
+  for (int c = 0; c < 3; ++c) y[c] = self_f_[k] * xk[c];
+  if constexpr (d > 3)
+    for (int c = 3; c < 6; ++c) y[c] = self_t_[k] * xk[c];
+  if constexpr (d > 6)
+    for (int c = 6; c < 11; ++c) y[c] = self_s_[k] * xk[c];
+  if (!cache_.empty()) {
+    for (long t = row_[k]; t < row_[k + 1]; ++t)
+      apply_block<M>(load<M>(cache_.data() + t, stride), ex_[t], ey_[t], ez_[t], xs + std::size_t(nbr_[t]) * d, y);
+  } else {
+    const double A = a2s_[k];
+    for (long t = row_[k]; t < row_[k + 1]; ++t)
+      apply_block<M>(table_scalars<M>(A, a2s_[nbr_[t]], dist_[t]), ex_[t], ey_[t], ez_[t],
+                     xs + std::size_t(nbr_[t]) * d, y);
+  }
+  for (long t = orow_[k]; t < orow_[k + 1]; ++t) {
+    const Vec3& e = overlap_e_[t];
+    apply_block<M>(overlap_s_[t], e.x(), e.y(), e.z(), xs + std::size_t(overlap_j_[t]) * d, y);
+  }
+  for (int c = 0; c < d; ++c) ys[k * d + c] = y[c];
+}
+
+template <Moments M>
+STOKESIAN_RS_AVX2 void RealSpaceSum::rows_avx2(long k0, long k1, const double* xs, double* ys) const {
+  for (long k = k0; k < k1; ++k) row<M>(k, xs, ys);
+}
+template <Moments M>
+void RealSpaceSum::rows_base(long k0, long k1, const double* xs, double* ys) const {
+  for (long k = k0; k < k1; ++k) row<M>(k, xs, ys);
+}
+template <Moments M>
+STOKESIAN_RS_AVX2 void RealSpaceSum::fill_avx2(long k0, long k1) {
+  for (long k = k0; k < k1; ++k) fill_row<M>(k);
+}
+template <Moments M>
+void RealSpaceSum::fill_base(long k0, long k1) {
+  for (long k = k0; k < k1; ++k) fill_row<M>(k);
+}
+
 template <Moments M>
 void RealSpaceSum::fill_cache() {
-  const long ns = row_[n_], stride = ns;
-  cache_.assign(std::size_t(ns) * cached_scalars(M), 0.0);
-#pragma omp parallel for schedule(dynamic, 64)
-  for (long k = 0; k < n_; ++k)
-    for (long t = row_[k]; t < row_[k + 1]; ++t)
-      store<M>(table_scalars<M>(a2s_[k], a2s_[nbr_[t]], dist_[t]), cache_.data() + t, stride);
+  cache_.assign(std::size_t(row_[n_]) * cached_scalars(M), 0.0);
+  const bool avx = use_avx2();
+  constexpr long chunk = 64;
+#pragma omp parallel for schedule(dynamic, 1)
+  for (long k0 = 0; k0 < n_; k0 += chunk) {
+    if (avx)
+      fill_avx2<M>(k0, std::min(n_, k0 + chunk));
+    else
+      fill_base<M>(k0, std::min(n_, k0 + chunk));
+  }
 }
 
 template <Moments M>
 void RealSpaceSum::apply_rows(const double* xs, double* ys) const {
-  constexpr int d = dof_per_particle(M);
-  const bool cached = !cache_.empty();
-  const long stride = row_[n_];
-#pragma omp parallel for schedule(dynamic, 32)
-  for (long k = 0; k < n_; ++k) {
-    double y[d];
-    const double* xk = xs + k * d;
-    for (int c = 0; c < 3; ++c) y[c] = self_f_[k] * xk[c];
-    if constexpr (d > 3)
-      for (int c = 3; c < 6; ++c) y[c] = self_t_[k] * xk[c];
-    if constexpr (d > 6)
-      for (int c = 6; c < 11; ++c) y[c] = self_s_[k] * xk[c];
-    if (cached) {
-      for (long t = row_[k]; t < row_[k + 1]; ++t)
-        apply_block<M>(load<M>(cache_.data() + t, stride), ex_[t], ey_[t], ez_[t], xs + std::size_t(nbr_[t]) * d, y);
-    } else {
-      const double A = a2s_[k];
-      for (long t = row_[k]; t < row_[k + 1]; ++t)
-        apply_block<M>(table_scalars<M>(A, a2s_[nbr_[t]], dist_[t]), ex_[t], ey_[t], ez_[t],
-                       xs + std::size_t(nbr_[t]) * d, y);
-    }
-    for (long t = orow_[k]; t < orow_[k + 1]; ++t) {
-      const Vec3& e = overlap_e_[t];
-      apply_block<M>(overlap_s_[t], e.x(), e.y(), e.z(), xs + std::size_t(overlap_j_[t]) * d, y);
-    }
-    for (int c = 0; c < d; ++c) ys[k * d + c] = y[c];
+  const bool avx = use_avx2();
+  constexpr long chunk = 32;
+#pragma omp parallel for schedule(dynamic, 1)
+  for (long k0 = 0; k0 < n_; k0 += chunk) {
+    if (avx)
+      rows_avx2<M>(k0, std::min(n_, k0 + chunk), xs, ys);
+    else
+      rows_base<M>(k0, std::min(n_, k0 + chunk), xs, ys);
   }
 }
 

@@ -84,6 +84,18 @@ class RealSpaceSum {
   mobility::PairScalars table_scalars(double A, double B, double r) const;
   template <Moments M>
   void fill_cache();
+  template <Moments M>
+  void row(long k, const double* xs, double* ys) const;
+  template <Moments M>
+  void fill_row(long k);
+  template <Moments M>
+  void rows_avx2(long k0, long k1, const double* xs, double* ys) const;
+  template <Moments M>
+  void rows_base(long k0, long k1, const double* xs, double* ys) const;
+  template <Moments M>
+  void fill_avx2(long k0, long k1);
+  template <Moments M>
+  void fill_base(long k0, long k1);
 
   long n_ = 0;
   Moments m_ = Moments::F;
@@ -116,7 +128,8 @@ class RealSpaceSum {
   std::size_t pairs_ = 0;
   // Scalars of the separated entries from the tables (2, 6 or 14 arrays of row_[N] values: xa ya |
   // yb ybt xc yc | xg yg xgt ygt yh xm ym zm), kept when they fit in cache_bytes_; otherwise each
-  // product evaluates the tables again. Both give the same bits.
+  // product evaluates the tables again. The two agree to rounding (the compiler may fuse the
+  // multiply-adds differently when the scalars are not stored).
   std::size_t cache_bytes_ = kDefaultCacheBytes;
   std::vector<double> cache_;
 };
