@@ -378,6 +378,11 @@ void RealSpaceSum::set_positions(const std::vector<Vec3>& x) {
     blocks.resize(nt);
     Block& b = blocks[tid];
     const long k0 = N * tid / nt, k1 = N * (tid + 1) / nt;
+    if (!row_.empty()) {  // update: about as many entries as last time
+      const std::size_t guess = std::size_t(1.1 * double(row_.back()) / nt) + 16;
+      for (auto* v : {&b.ex, &b.ey, &b.ez, &b.dist}) v->reserve(guess);
+      b.nbr.reserve(guess);
+    }
     b.count.assign(k1 - k0, 0);
     b.ocount.assign(k1 - k0, 0);
     for (long k = k0; k < k1; ++k) {
@@ -464,10 +469,12 @@ void RealSpaceSum::set_positions(const std::vector<Vec3>& x) {
     for (long t = orow_[k]; t < orow_[k + 1]; ++t)
       overlap_s_[t] = real_scalars(as[k], as[overlap_j_[t]], odist[t], xi_, mu_, m_);
   pairs_ = std::size_t(ns + no) / 2;
-  // Scalars of the separated entries, kept when they fit in the budget.
-  cache_.clear();
-  cache_.shrink_to_fit();
-  if (double(ns) * cached_scalars(m_) * sizeof(double) <= double(cache_bytes_)) {
+  // Scalars of the separated entries, kept when they fit in the budget (the storage is reused by
+  // later updates).
+  if (double(ns) * cached_scalars(m_) * sizeof(double) > double(cache_bytes_)) {
+    cache_.clear();
+    cache_.shrink_to_fit();
+  } else {
     if (m_ == Moments::F)
       fill_cache<Moments::F>();
     else if (m_ == Moments::FT)
@@ -643,7 +650,7 @@ void RealSpaceSum::fill_base(long k0, long k1) {
 
 template <Moments M>
 void RealSpaceSum::fill_cache() {
-  cache_.assign(std::size_t(row_[n_]) * cached_scalars(M), 0.0);
+  cache_.resize(std::size_t(row_[n_]) * cached_scalars(M));  // every entry is written below
   const bool avx = use_avx2();
   constexpr long chunk = 64;
 #pragma omp parallel for schedule(dynamic, 1)
@@ -673,6 +680,8 @@ void RealSpaceSum::apply(const VecX& in, VecX& out) const {
     throw std::invalid_argument("RealSpaceSum::apply: input of size " + std::to_string(in.size()) + ", expected " +
                                 std::to_string(size()));
   const int d = dof_per_particle(m_);
+  out.resize(size());
+  if (n_ == 0) return;  // default-constructed
   std::vector<double> xs(std::size_t(n_) * d), ys(std::size_t(n_) * d);
 #pragma omp parallel for schedule(static)
   for (long k = 0; k < n_; ++k)
@@ -683,7 +692,6 @@ void RealSpaceSum::apply(const VecX& in, VecX& out) const {
     apply_rows<Moments::FT>(xs.data(), ys.data());
   else
     apply_rows<Moments::FTS>(xs.data(), ys.data());
-  out.resize(size());
 #pragma omp parallel for schedule(static)
   for (long k = 0; k < n_; ++k)
     for (int c = 0; c < d; ++c) out[Eigen::Index(order_[k]) * d + c] = ys[std::size_t(k) * d + c];

@@ -74,6 +74,8 @@ class RealSpaceSum {
   double table_error() const { return table_error_; }     // measured, relative (see header)
   double table_target() const { return table_target_; }   // max(1e-4 tol, 1e-15)
   bool cached() const { return !cache_.empty(); }
+  // Cell order: order()[k] = original index of the k-th particle in the sorted (cell by cell) order.
+  const std::vector<int>& order() const { return order_; }
 
  private:
   void build_table(double tolerance);

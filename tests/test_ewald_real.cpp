@@ -190,4 +190,7 @@ TEST_CASE("real space: bad input is rejected") {
   CHECK_THROWS_AS(ok.update_positions(std::vector<Vec3>(3)), std::invalid_argument);
   VecX y;
   CHECK_THROWS_AS(ok.apply(VecX::Zero(7), y), std::invalid_argument);
+  const ewald::RealSpaceSum empty;
+  empty.apply(VecX(), y);
+  CHECK(y.size() == 0);
 }
