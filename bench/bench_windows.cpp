@@ -48,7 +48,9 @@
 //           poly_max_dev (piecewise polynomial of that degree)
 //   kind 5  checks: what (0 ES quadrature kQuadNodes vs 2 kQuadNodes, 1 KB closed form vs
 //           quadrature, 2 FFT grid pipeline vs the direct pair formula), window, value (max rel. diff)
-//   kind 6  cost-model choice: rho = N / (2 n_max)^3, tol, window, sigma, P, cost (s, 3D, n_max = 32)
+//   kind 6  cost model, per window its cheapest (sigma, P): deriv (0: P of the value window, 1: P
+//           meeting tol with derivative windows on both sides too), rho = N / (2 n_max)^3, tol,
+//           window, sigma, P, cost (s, 3D, n_max = 32: T = c_s(P) N P^3 + c_f M^3 log2 M^3), c_s, c_f
 //   bench_windows [--quick] [--out DIR]     (--quick: K = 48 particles, n_max = 16, fewer cases)
 #include "bench/harness.hpp"
 
@@ -673,27 +675,29 @@ int main(int argc, char** argv) {
     for (const auto& [P, c] : cs_values)
       std::printf("cost model: P %2d: c_s = %.2f ns, c_f = %.3f ns, c_s / c_f = %.2f\n", P, 1e9 * c, 1e9 * cf, c / cf);
     const int nm3 = 32;  // n_max of the 3D model
+    // per window the cheapest (sigma, P) (kind 6 rows, one per window); ES and KB often tie
     for (int deriv : {0, 1})
       for (double rho : {0.1, 1.0, 10.0}) {
         const double N = rho * std::pow(2.0 * nm3, 3);
-        for (double tol : tols) {
-          const Choice* best = nullptr;
-          double bc = std::numeric_limits<double>::infinity();
-          for (const Choice& ch : choices) {
-            const int P = deriv ? ch.P_d2 : ch.P;
-            if (ch.tol != tol || P == 0) continue;
-            const double M = std::ceil(2 * ch.sigma * nm3 - 1e-9), M3 = M * M * M;
-            const double cost = cs_at(P) * N * std::pow(P, 3) + cf * M3 * std::log2(M3);
-            if (cost < bc) bc = cost, best = &ch;
+        for (double tol : tols)
+          for (int kind : {kGauss, kES, kKB}) {
+            const Choice* best = nullptr;
+            double bc = std::numeric_limits<double>::infinity();
+            for (const Choice& ch : choices) {
+              const int P = deriv ? ch.P_d2 : ch.P;
+              if (ch.kind != kind || ch.tol != tol || P == 0) continue;
+              const double M = std::ceil(2 * ch.sigma * nm3 - 1e-9), M3 = M * M * M;
+              const double cost = cs_at(P) * N * std::pow(P, 3) + cf * M3 * std::log2(M3);
+              if (cost < bc) bc = cost, best = &ch;
+            }
+            if (!best) continue;
+            const int P = deriv ? best->P_d2 : best->P;
+            std::printf("%s rho %5.1f tol %.0e: %-8s cheapest at sigma %.2f P %2d, %.4f s\n",
+                        deriv ? "value+derivative" : "value", rho, tol, kNames[kind], best->sigma, P, bc);
+            res.add({{"kind", 6}, {"deriv", deriv}, {"rho", rho}, {"tol", tol}, {"window", kind},
+                     {"sigma", best->sigma}, {"P", P}, {"cost", bc}, {"c_s", cs_at(P)}, {"c_f", cf}},
+                    {});
           }
-          if (!best) continue;
-          const int P = deriv ? best->P_d2 : best->P;
-          std::printf("%s rho %5.1f tol %.0e: cheapest %s sigma %.2f P %d, %.4f s\n", deriv ? "value+derivative" : "value",
-                      rho, tol, kNames[best->kind], best->sigma, P, bc);
-          res.add({{"kind", 6}, {"deriv", deriv}, {"rho", rho}, {"tol", tol}, {"window", best->kind},
-                   {"sigma", best->sigma}, {"P", P}, {"cost", bc}, {"c_s", cs_at(P)}, {"c_f", cf}},
-                  {});
-        }
       }
   }
   std::printf("wrote %s\n", res.write(opt.out).c_str());

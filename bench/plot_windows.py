@@ -9,7 +9,8 @@
   (h)   derivative (one side) error against the distance of a grid point from the support edge,
         sigma = 2 (the ES derivative is unbounded at the edge).
 
-Prints markdown tables (P and beta/P per window, tol, sigma; derivative P; cost-model choices;
+Prints markdown tables (P and beta/P per window, tol, sigma; derivative P; per window the cheapest
+sigma and P of the 3D cost model and its cost relative to the cheapest window;
 measured c_s, c_f, window evaluation times) and least-squares rules P = a + b log10(1/tol) and
 beta/P = c + d / sigma, for docs/pme_windows.md.
 
@@ -150,17 +151,25 @@ for r in kind(3):
     print(f"FFTW {r['M']:.0f}^3: r2c {1e3 * r['_ph']['r2c']:.2f} ms, c2r {1e3 * r['_ph']['c2r']:.2f} ms,"
           f" c_f = {1e9 * r['c_f']:.3f} ns")
 for r in kind(4):
-    print(f"window evaluation {NAMES[int(r['window'])]}: {r['ns_per_point']:.1f} ns per point")
+    print(f"window evaluation {NAMES[int(r['window'])]}: {r['ns_per_point']:.1f} ns per point (formula),"
+          f" {r.get('poly_ns_per_point', float('nan')):.2f} ns piecewise degree {r.get('degree', 0):.0f}"
+          f" (max dev {r.get('poly_max_dev', float('nan')):.1e})")
 for r in kind(5):
     print(f"check {r['what']:.0f} ({NAMES[int(r['window'])]}): {r['value']:.2e}")
 
-print("\n### cheapest (window, sigma, P), 3D model, n_max = 32\n")
-print("| tol | " + " | ".join(f"rho={rho:g}{' +deriv' if d else ''}" for d in (0, 1) for rho in (0.1, 1, 10)) + " |")
-print("|---" * 7 + "|")
-for tol in tols:
-    cells = []
-    for d in (0, 1):
+print("\n### cost model (3D, n_max = 32): per window its cheapest sigma and P; cost relative to the best\n")
+for d in (0, 1):
+    print(f"\n{'value and derivative windows (both sides)' if d else 'value window'}:\n")
+    print("| tol | " + " | ".join(f"rho={rho:g}: " + " / ".join(NAMES) for rho in (0.1, 1, 10)) + " |")
+    print("|---" * 4 + "|")
+    for tol in tols:
+        cells = []
         for rho in (0.1, 1, 10):
-            r = [r for r in kind(6) if r["deriv"] == d and r["rho"] == rho and r["tol"] == tol]
-            cells.append("-" if not r else f"{NAMES[int(r[0]['window'])]} {r[0]['sigma']:g} P{r[0]['P']:.0f}")
-    print(f"| {tol:g} | " + " | ".join(cells) + " |")
+            sel = {int(r["window"]): r for r in kind(6) if r["deriv"] == d and r["rho"] == rho and r["tol"] == tol}
+            if not sel:
+                cells.append("-")
+                continue
+            best = min(r["cost"] for r in sel.values())
+            cells.append(" / ".join(
+                f"{sel[w]['sigma']:g}, P{sel[w]['P']:.0f}, {sel[w]['cost'] / best:.2f}" if w in sel else "-" for w in range(3)))
+        print(f"| {tol:g} | " + " | ".join(cells) + " |")
