@@ -7,7 +7,9 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 
@@ -209,6 +211,7 @@ void RealSpaceSum::build_table(double tolerance) {
   const double r_hi = cutoff_gap_ + 2.0 * amax;
   const int kmax = m_ == Moments::F ? 2 : 4;
   nf_ = 3 * kmax;
+  stride_ = m_ == Moments::F ? 8 : 12;  // padded to whole 4-vectors
   table_target_ = std::max(1e-4 * tolerance, 1e-15);
   const LD kmob = 1.0L / (8.0L * LD(kPi) * LD(mu_));
   constexpr int nodes = kCoef;
@@ -224,7 +227,7 @@ void RealSpaceSum::build_table(double tolerance) {
   std::array<std::array<LD, 4>, 3> d;
   for (int nint = 4;; nint *= 2) {
     const double h = (r_hi - r_lo_) / nint;
-    std::vector<double> tab(std::size_t(nint) * kCoef * nf_);
+    std::vector<double> tab(std::size_t(nint) * kCoef * stride_, 0.0);
     for (int i = 0; i < nint; ++i) {
       LD val[nodes][12];
       for (int q = 0; q < nodes; ++q) {
@@ -241,7 +244,7 @@ void RealSpaceSum::build_table(double tolerance) {
         }
         for (int n = 0; n < nodes; ++n)
           for (int c = 0; c < nodes; ++c) mono[c] += cheb[n] * T[n][c];
-        for (int c = 0; c < nodes; ++c) tab[(std::size_t(i) * kCoef + (kCoef - 1 - c)) * nf_ + f] = double(mono[c]);
+        for (int c = 0; c < nodes; ++c) tab[(std::size_t(i) * kCoef + (kCoef - 1 - c)) * stride_ + f] = double(mono[c]);
       }
     }
     // Measured error on 9 points per interval (ends included), evaluated as the kernel does.
@@ -256,8 +259,8 @@ void RealSpaceSum::build_table(double tolerance) {
         const double cmax[3] = {1.0, std::min(r * r, 2.0 * amax * amax) / 6.0, rho * rho * rho * rho / 36.0};
         double e[4] = {0.0, 0.0, 0.0, 0.0};  // bound of the error of d_k (k = 1..4) of the pair's Psi
         for (int f = 0; f < nf_; ++f) {
-          double w = tab[(std::size_t(i) * kCoef) * nf_ + f];
-          for (int c = 1; c < kCoef; ++c) w = w * t + tab[(std::size_t(i) * kCoef + c) * nf_ + f];
+          double w = tab[(std::size_t(i) * kCoef) * stride_ + f];
+          for (int c = 1; c < kCoef; ++c) w = w * t + tab[(std::size_t(i) * kCoef + c) * stride_ + f];
           const int k = f / 3, j = f % 3;
           e[k] += std::abs(double(LD(w) - kmob * d[j][k])) * cmax[j];
         }
@@ -486,16 +489,21 @@ void RealSpaceSum::set_positions(const std::vector<Vec3>& x) {
 
 template <Moments M>
 STOKESIAN_RS_INLINE mobility::PairScalars RealSpaceSum::table_scalars(double A, double B, double r) const {
-  constexpr int nf = M == Moments::F ? 6 : 12;
+  // Horner in 4-wide vectors over the functions (stride 8 for F, 12 otherwise).
+  typedef double v4 __attribute__((vector_size(32), aligned(8)));
+  constexpr int nv = M == Moments::F ? 2 : 3, nf = 4 * nv;
   const double km = 1.0 / (8.0 * kPi * mu_), u = 1.0 / r;
   const double sidx = (r - r_lo_) * inv_h_;
   const int idx = std::min(intervals_ - 1, std::max(0, int(sidx)));
   const double tt = 2.0 * (sidx - idx) - 1.0;
-  const double* c = table_.data() + std::size_t(idx) * kCoef * nf;
-  double w[nf];
-  for (int f = 0; f < nf; ++f) w[f] = c[f];
-  for (int lev = 1; lev < kCoef; ++lev)
-    for (int f = 0; f < nf; ++f) w[f] = w[f] * tt + c[lev * nf + f];
+  const v4* c = reinterpret_cast<const v4*>(table_.data() + std::size_t(idx) * kCoef * nf);
+  v4 a0 = c[0], a1 = c[1], a2 = nv > 2 ? c[nv - 1] : v4{};
+  for (int lev = 1; lev < kCoef; ++lev) {
+    a0 = a0 * tt + c[lev * nv];
+    a1 = a1 * tt + c[lev * nv + 1];
+    if constexpr (nv > 2) a2 = a2 * tt + c[lev * nv + 2];
+  }
+  const double w[12] = {a0[0], a0[1], a0[2], a0[3], a1[0], a1[1], a1[2], a1[3], a2[0], a2[1], a2[2], a2[3]};
   // Derivatives of Psi = B0 + c1 B1 + c2 B2 with B0 = r - W0, B1 = 2 / r - W1, B2 = -W2 (times
   // 1/(8 pi mu)); c1, c2 of the kind pair (alpha = this row, radius^2 A; beta radius^2 B).
   const double u2 = u * u, u3 = u2 * u, AB = A * B;
@@ -588,10 +596,16 @@ STOKESIAN_RS_INLINE mobility::PairScalars load(const double* c, long stride) {
 // The row kernels below are compiled twice, for the baseline x86-64 target and for AVX2 + FMA, and
 // chosen once at run time (same choice for the cache fill and the product, so cached and uncached
 // products give the same bits on a given machine).
+namespace {
+std::atomic<bool> g_force_baseline{false};
+}
+
+void RealSpaceSum::force_baseline_kernels(bool on) { g_force_baseline = on; }
+
 static bool use_avx2() {
 #if defined(__x86_64__) && defined(__GNUC__)
   static const bool yes = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
-  return yes;
+  return yes && !g_force_baseline;
 #else
   return false;
 #endif

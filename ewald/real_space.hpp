@@ -74,6 +74,9 @@ class RealSpaceSum {
   double table_error() const { return table_error_; }     // measured, relative (see header)
   double table_target() const { return table_target_; }   // max(1e-4 tol, 1e-15)
   bool cached() const { return !cache_.empty(); }
+  // The row kernels exist for the baseline x86-64 target and for AVX2 + FMA (chosen at run time
+  // when the CPU has them); true forces the baseline ones in every object (for tests).
+  static void force_baseline_kernels(bool on);
   // Cell order: order()[k] = original index of the k-th particle in the sorted (cell by cell) order.
   const std::vector<int>& order() const { return order_; }
 
@@ -107,9 +110,10 @@ class RealSpaceSum {
   std::vector<double> self0_;   // self-term coefficients F, T, S per particle, original order
 
   // Tables: intervals_ intervals of width h on [r_lo, r_hi]; per interval, kCoef levels (highest
-  // power first) of nf_ functions (k-major: d1 W0, d1 W1, d1 W2, d2 W0, ...), already times 1/(8 pi mu).
+  // power first) of nf_ functions (k-major: d1 W0, d1 W1, d1 W2, d2 W0, ...; stored with stride_,
+  // zero padded), already times 1/(8 pi mu).
   static constexpr int kCoef = 8;
-  int intervals_ = 0, nf_ = 0;
+  int intervals_ = 0, nf_ = 0, stride_ = 0;  // functions used, functions stored per level
   double r_lo_ = 0.0, inv_h_ = 0.0;
   std::vector<double> table_;
   double table_error_ = 0.0, table_target_ = 0.0;

@@ -152,6 +152,15 @@ TEST_CASE("real space: bitwise independent of the thread count and of the scalar
     CHECK(!uncached.cached());
     CHECK((y3 - y1).norm() <= 1e-14 * y1.norm());
     CHECK((y3.array() == y31.array()).all());
+    // The baseline (non-AVX2) kernels give the same product to rounding, cached or not.
+    ewald::RealSpaceSum::force_baseline_kernels(true);
+    const ewald::RealSpaceSum base(c.x, c.a, c.domain, p.cutoff_gap, p.xi, 1.0, m, tol);
+    VecX y4, y5;
+    base.apply(in, y4);
+    uncached.apply(in, y5);
+    ewald::RealSpaceSum::force_baseline_kernels(false);
+    CHECK((y4 - y1).norm() <= 1e-14 * y1.norm());
+    CHECK((y5 - y1).norm() <= 1e-14 * y1.norm());
     omp_set_num_threads(saved);
     CHECK(y1.size() == y2.size());
     CHECK((y1.array() == y2.array()).all());
