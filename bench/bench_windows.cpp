@@ -51,6 +51,8 @@
 //   kind 6  cost model, per window its cheapest (sigma, P): deriv (0: P of the value window, 1: P
 //           meeting tol with derivative windows on both sides too), rho = N / (2 n_max)^3, tol,
 //           window, sigma, P, cost (s, 3D, n_max = 32: T = c_s(P) N P^3 + c_f M^3 log2 M^3), c_s, c_f
+//   kind 8  the shape rule t_rule = beta / P = 1.84 - 0.77 / sigma (Gaussian), 3.60 - 1.65 / sigma (ES,
+//           KB) at the minimal P and P + 1: window, sigma, tol, P, t_rule, err_max, d2_max
 //   bench_windows [--quick] [--out DIR]     (--quick: K = 48 particles, n_max = 16, fewer cases)
 #include "bench/harness.hpp"
 
@@ -501,6 +503,22 @@ int main(int argc, char** argv) {
                  {"err_max", emin}, {"P_d1", pd1}, {"P_d2", pd2}},
                 {});
         choices.push_back({kind, sigma, tol, pmin, pd2 ? std::max(pmin, pd2) : 0, tmin});
+      }
+    }
+  }
+
+  // --- kind 8: the fitted shape rule beta / P = a + b / sigma (docs/pme_windows.md) at the minimal P
+  for (double tol : tols) {
+    const Problem pr = make_problem(n_max, tol, s);
+    for (const Choice& ch : choices) {
+      if (ch.tol != tol || ch.P == 0) continue;
+      const double t_rule = ch.kind == kGauss ? 1.84 - 0.77 / ch.sigma : 3.60 - 1.65 / ch.sigma;
+      const int M = int(std::ceil(2 * ch.sigma * n_max - 1e-9));
+      for (int dP : {0, 1}) {
+        const Errors e = measure(pr, Window{ch.kind, ch.P + dP, t_rule * (ch.P + dP)}, M, q, true);
+        res.add({{"kind", 8}, {"window", ch.kind}, {"sigma", ch.sigma}, {"tol", tol}, {"P", ch.P + dP},
+                 {"t_rule", t_rule}, {"err_max", e.max0}, {"d2_max", e.max2}},
+                {});
       }
     }
   }

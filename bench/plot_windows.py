@@ -173,3 +173,17 @@ for d in (0, 1):
             cells.append(" / ".join(
                 f"{sel[w]['sigma']:g}, P{sel[w]['P']:.0f}, {sel[w]['cost'] / best:.2f}" if w in sel else "-" for w in range(3)))
         print(f"| {tol:g} | " + " | ".join(cells) + " |")
+
+rule = kind(8)
+if rule:
+    print("\n### shape rule beta/P = a + b / sigma at the minimal P (P+1): max error / tol\n")
+    print("| tol | " + " | ".join(f"{NAMES[w]} s={s:g}" for s in sigmas for w in range(3)) + " |")
+    print("|---" * (1 + 3 * len(sigmas)) + "|")
+    for tol in tols:
+        cells = []
+        for s_ in sigmas:
+            for w in range(3):
+                r = sorted((r for r in rule if r["window"] == w and r["sigma"] == s_ and r["tol"] == tol),
+                           key=lambda r: r["P"])
+                cells.append("-" if len(r) < 2 else f"{r[0]['err_max'] / tol:.2f} ({r[1]['err_max'] / tol:.2f})")
+        print(f"| {tol:g} | " + " | ".join(cells) + " |")
