@@ -613,15 +613,16 @@ static bool use_avx2() {
 
 template <Moments M>
 STOKESIAN_RS_INLINE void RealSpaceSum::fill_row(long k) {
-  const long stride = row_[n_];
-  for (long t = row_[k]; t < row_[k + 1]; ++t)
-    store<M>(table_scalars<M>(a2s_[k], a2s_[nbr_[t]], dist_[t]), cache_.data() + t, stride);
+  constexpr int rec = cached_scalars(M);
+  for (long t = row_[k]; t < row_[k + 1]; ++t) {
+    double* c = cache_.data() + t * rec;
+    store<M>(table_scalars<M>(a2s_[k], a2s_[nbr_[t]], dist_[t]), c, 1);
+  }
 }
 
 template <Moments M>
 STOKESIAN_RS_INLINE void RealSpaceSum::row(long k, const double* xs, double* ys) const {
   constexpr int d = dof_per_particle(M);
-  const long stride = row_[n_];
   double y[d];
   const double* xk = xs + k * d;
   for (int c = 0; c < 3; ++c) y[c] = self_f_[k] * xk[c];
@@ -630,8 +631,11 @@ STOKESIAN_RS_INLINE void RealSpaceSum::row(long k, const double* xs, double* ys)
   if constexpr (d > 6)
     for (int c = 6; c < 11; ++c) y[c] = self_s_[k] * xk[c];
   if (!cache_.empty()) {
-    for (long t = row_[k]; t < row_[k + 1]; ++t)
-      apply_block<M>(load<M>(cache_.data() + t, stride), ex_[t], ey_[t], ez_[t], xs + std::size_t(nbr_[t]) * d, y);
+    constexpr int rec = cached_scalars(M);
+    for (long t = row_[k]; t < row_[k + 1]; ++t) {
+      const double* c = cache_.data() + t * rec;
+      apply_block<M>(load<M>(c, 1), ex_[t], ey_[t], ez_[t], xs + std::size_t(nbr_[t]) * d, y);
+    }
   } else {
     const double A = a2s_[k];
     for (long t = row_[k]; t < row_[k + 1]; ++t)

@@ -35,7 +35,7 @@
 // sorted particle gathers its own row from contiguous structure-of-arrays pair data (neighbour,
 // unit vector, distance), and the result is scattered back. Each row is summed by one thread in a
 // fixed order, so the result is bitwise independent of the number of OpenMP threads. The scalars of
-// the separated entries are kept per entry (structure of arrays) when they fit in cache_bytes
+// the separated entries are kept per entry (one record per entry) when they fit in cache_bytes
 // (default 256 MB: 16, 48 or 112 bytes per ordered pair for F, FT, FTS); repeated products then
 // only read them.
 #include "engine/core/domain.hpp"
@@ -132,7 +132,7 @@ class RealSpaceSum {
   std::vector<Vec3> overlap_e_;
   std::vector<mobility::PairScalars> overlap_s_;
   std::size_t pairs_ = 0;
-  // Scalars of the separated entries from the tables (2, 6 or 14 arrays of row_[N] values: xa ya |
+  // Scalars of the separated entries from the tables (records of 2, 6 or 14 values per entry: xa ya |
   // yb ybt xc yc | xg yg xgt ygt yh xm ym zm), kept when they fit in cache_bytes_; otherwise each
   // product evaluates the tables again. The two agree to rounding (the compiler may fuse the
   // multiply-adds differently when the scalars are not stored).
