@@ -49,7 +49,7 @@
 //   kind 5  checks: what (0 ES quadrature kQuadNodes vs 2 kQuadNodes, 1 KB closed form vs
 //           quadrature, 2 FFT grid pipeline vs the direct pair formula), window, value (max rel. diff)
 //   kind 6  cost model, per window its cheapest (sigma, P): deriv (0: P of the value window, 1: P
-//           meeting tol with derivative windows on both sides too), rho = N / (2 n_max)^3, tol,
+//           meeting tol with derivative windows on both sides too), rho = N / (2 n_max)^3 in {0.01, 0.1, 1, 10}, tol,
 //           window, sigma, P, cost (s, 3D, n_max = 32: T = c_s(P) N P^3 + c_f M^3 log2 M^3), c_s, c_f
 //   kind 8  the shape rule t_rule = beta / P = 1.84 - 0.77 / sigma (Gaussian), 3.60 - 1.65 / sigma (ES,
 //           KB) at the minimal P and P + 1: window, sigma, tol, P, t_rule, err_max, d2_max
@@ -695,7 +695,7 @@ int main(int argc, char** argv) {
     const int nm3 = 32;  // n_max of the 3D model
     // per window the cheapest (sigma, P) (kind 6 rows, one per window); ES and KB often tie
     for (int deriv : {0, 1})
-      for (double rho : {0.1, 1.0, 10.0}) {
+      for (double rho : {0.01, 0.1, 1.0, 10.0}) {
         const double N = rho * std::pow(2.0 * nm3, 3);
         for (double tol : tols)
           for (int kind : {kGauss, kES, kKB}) {

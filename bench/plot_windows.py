@@ -160,11 +160,11 @@ for r in kind(5):
 print("\n### cost model (3D, n_max = 32): per window its cheapest sigma and P; cost relative to the best\n")
 for d in (0, 1):
     print(f"\n{'value and derivative windows (both sides)' if d else 'value window'}:\n")
-    print("| tol | " + " | ".join(f"rho={rho:g}: " + " / ".join(NAMES) for rho in (0.1, 1, 10)) + " |")
-    print("|---" * 4 + "|")
+    print("| tol | " + " | ".join(f"rho={rho:g}: " + " / ".join(NAMES) for rho in (0.01, 0.1, 1, 10)) + " |")
+    print("|---" * 5 + "|")
     for tol in tols:
         cells = []
-        for rho in (0.1, 1, 10):
+        for rho in (0.01, 0.1, 1, 10):
             sel = {int(r["window"]): r for r in kind(6) if r["deriv"] == d and r["rho"] == rho and r["tol"] == tol}
             if not sel:
                 cells.append("-")
