@@ -51,6 +51,8 @@
 //   kind 6  cost model, per window its cheapest (sigma, P): deriv (0: P of the value window, 1: P
 //           meeting tol with derivative windows on both sides too), rho = N / (2 n_max)^3 in {0.01, 0.1, 1, 10}, tol,
 //           window, sigma, P, cost (s, 3D, n_max = 32: T = c_s(P) N P^3 + c_f M^3 log2 M^3), c_s, c_f
+//   kind 7  edge test: window, sigma, tol, P (= P_d2), eps (distance of the first grid point inside
+//           the support edge, grid units), err_max, d1_max, d2_max
 //   kind 8  the shape rule t_rule = beta / P = 1.84 - 0.77 / sigma (Gaussian), 3.60 - 1.65 / sigma (ES,
 //           KB) at the minimal P and P + 1: window, sigma, tol, P, t_rule, err_max, d2_max
 //   bench_windows [--quick] [--out DIR]     (--quick: K = 48 particles, n_max = 16, fewer cases)
@@ -470,7 +472,7 @@ int main(int argc, char** argv) {
     int kind;
     double sigma, tol;
     int P, P_d2;
-    double t;
+    double t, t_d2;  // value-optimal shape at P and at max(P, P_d2)
   };
   std::vector<Choice> choices;
   for (double tol : tols) {
@@ -480,12 +482,14 @@ int main(int argc, char** argv) {
       for (int kind : {kGauss, kES, kKB}) {
         int pmin = 0, pd1 = 0, pd2 = 0;
         double tmin = 0, emin = 0;
+        std::vector<double> t_at(33, 0.0);
         for (int P = 2; P <= 32; ++P) {
           double err = 0;
           const auto a = std::chrono::steady_clock::now();
           const double t = best_shape(pr, kind, P, M, q, err);
           const Window w{kind, P, t * P};
           const Errors e = measure(pr, w, M, q, true);
+          t_at[P] = t;
           const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count();
           res.add({{"kind", 0}, {"window", kind}, {"sigma", sigma}, {"tol", tol}, {"P", P}, {"t", t},
                    {"beta", t * P}, {"M", M}, {"n_max", n_max}, {"err_max", e.max0}, {"err_rms", e.rms0},
@@ -502,7 +506,8 @@ int main(int argc, char** argv) {
         res.add({{"kind", 1}, {"window", kind}, {"sigma", sigma}, {"tol", tol}, {"P", pmin}, {"t", tmin},
                  {"err_max", emin}, {"P_d1", pd1}, {"P_d2", pd2}},
                 {});
-        choices.push_back({kind, sigma, tol, pmin, pd2 ? std::max(pmin, pd2) : 0, tmin});
+        const int pall = pd2 ? std::max(pmin, pd2) : 0;
+        choices.push_back({kind, sigma, tol, pmin, pall, tmin, pall ? t_at[pall] : 0.0});
       }
     }
   }
@@ -525,23 +530,23 @@ int main(int argc, char** argv) {
 
   // --- kind 7: a grid point close to the support edge (ES: phi' ~ 1 / sqrt(distance)) -----------
   // Particle 0 sits so that its first grid point is at distance eps (grid units) inside the edge
-  // of the support; derivative (one side) error over its pairs with the K random particles, at
-  // the minimal P and value-optimal shape of each window.
+  // of the support; derivative errors over its pairs with the K random particles, at the support
+  // that meets tol with derivative windows on both sides (P_d2) and its value-optimal shape.
   for (const Choice& ch : choices) {
-    if (ch.P == 0 || (ch.sigma != 2.0 && ch.sigma != 1.25) || (ch.tol != 1e-4 && ch.tol != 1e-8 && !quick)) continue;
+    if (ch.P_d2 == 0 || (ch.sigma != 2.0 && ch.sigma != 1.25) || (ch.tol != 1e-4 && ch.tol != 1e-8 && !quick)) continue;
     const int M = int(std::ceil(2 * ch.sigma * n_max - 1e-9));
     for (double eps : {1e-1, 1e-2, 1e-4, 1e-6, 1e-8, 1e-10, 1e-12}) {
       std::vector<double> se = s;
       // first grid point g0 = 3 (after ceil), at distance P/2 - eps from the particle
-      se[0] = (3.0 + 0.5 * ch.P - eps) / M;
+      se[0] = (3.0 + 0.5 * ch.P_d2 - eps) / M;
       const Problem pe = make_problem(n_max, ch.tol, se);
-      const Errors e = measure(pe, Window{ch.kind, ch.P, ch.t * ch.P}, M, q, true);
-      res.add({{"kind", 7}, {"window", ch.kind}, {"sigma", ch.sigma}, {"tol", ch.tol}, {"P", ch.P}, {"eps", eps},
+      const Errors e = measure(pe, Window{ch.kind, ch.P_d2, ch.t_d2 * ch.P_d2}, M, q, true);
+      res.add({{"kind", 7}, {"window", ch.kind}, {"sigma", ch.sigma}, {"tol", ch.tol}, {"P", ch.P_d2}, {"eps", eps},
                {"d1_max", e.max1}, {"d2_max", e.max2}, {"err_max", e.max0}},
               {});
       if (eps == 1e-1 || eps == 1e-12)
         std::printf("edge: %-8s sigma %.2f tol %.0e P %2d, grid point %.0e inside the edge: value %.2e, d1 %.2e, d2 %.2e\n",
-                    kNames[ch.kind], ch.sigma, ch.tol, ch.P, eps, e.max0, e.max1, e.max2);
+                    kNames[ch.kind], ch.sigma, ch.tol, ch.P_d2, eps, e.max0, e.max1, e.max2);
     }
   }
 

@@ -6,7 +6,8 @@
         value and derivative window on both sides (at the value-optimal shape);
   (f, g) max error against P with the optimal shape at each P, sigma = 1.25 and 2, for the spectra
         of tol = 1e-4 (dashed) and 1e-10 (solid);
-  (h)   derivative (one side) error against the distance of a grid point from the support edge,
+  (h)   derivative (one side) error against the distance of a grid point from the support edge at
+        the support meeting tol with derivative windows (P_d2),
         sigma = 2 (the ES derivative is unbounded at the edge).
 
 Prints markdown tables (P and beta/P per window, tol, sigma; derivative P; per window the cheapest
