@@ -138,6 +138,14 @@ class RealSpaceSum {
   // multiply-adds differently when the scalars are not stored).
   std::size_t cache_bytes_ = kDefaultCacheBytes;
   std::vector<double> cache_;
+  // Per-thread scratch of the pair search (kept so that updates reuse the storage).
+  struct Block {
+    std::vector<long> count, ocount;
+    std::vector<int> nbr, onbr;
+    std::vector<double> ex, ey, ez, dist, odist;
+    std::vector<Vec3> oe;
+  };
+  std::vector<Block> blocks_;
 };
 
 }  // namespace stokesian::ewald
