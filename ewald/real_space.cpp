@@ -296,6 +296,16 @@ void RealSpaceSum::update_positions(const std::vector<Vec3>& x) {
   set_positions(x);
 }
 
+void RealSpaceSum::update_positions(const std::vector<Vec3>& x, const Domain& domain) {
+  if (!domain.periodic() || domain.box != domain_.box)
+    throw std::invalid_argument("RealSpaceSum::update_positions: the box may change only by its strain");
+  if (long(x.size()) != n_)
+    throw std::invalid_argument("RealSpaceSum::update_positions: " + std::to_string(x.size()) + " positions for " +
+                                std::to_string(n_) + " particles");
+  domain_ = domain;
+  set_positions(x);
+}
+
 void RealSpaceSum::set_positions(const std::vector<Vec3>& x) {
   const long N = n_;
   const double amax = *std::max_element(radius_.begin(), radius_.end());

@@ -62,6 +62,9 @@ class RealSpaceSum {
   // New positions of the same particles (same radii, box, strain): rebuilds the cell order and
   // the pair data, keeps the tables and self terms. The result equals a new object's.
   void update_positions(const std::vector<Vec3>& x);
+  // The same with a new Lees-Edwards strain (same box edges, still periodic): the tables and self
+  // terms do not depend on the strain, so shearing boxes keep them too.
+  void update_positions(const std::vector<Vec3>& x, const Domain& domain);
 
   // out = real-space sum + self term (overwritten), size N * dof_per_particle(m).
   void apply(const VecX& in, VecX& out) const;

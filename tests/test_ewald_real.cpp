@@ -193,6 +193,20 @@ TEST_CASE("real space: bitwise independent of the thread count and of the scalar
     c2.x = x2;
     const VecX ref = reference(c2, p.cutoff_gap, p.xi, 1.0, m, in);
     CHECK((ya - ref).norm() / ref.norm() <= 1e-3 * tol);
+
+    // A new strain (Lees-Edwards step), same box: update equals a fresh build, bitwise.
+    c2.domain = c.domain.strained_by(0.21);
+    moved.update_positions(x2, c2.domain);
+    const ewald::RealSpaceSum sheared(x2, c.a, c2.domain, p.cutoff_gap, p.xi, 1.0, m, tol);
+    VecX yc, yd;
+    moved.apply(in, yc);
+    sheared.apply(in, yd);
+    CHECK((yc.array() == yd.array()).all());
+    const VecX ref2 = reference(c2, p.cutoff_gap, p.xi, 1.0, m, in);
+    CHECK((yc - ref2).norm() / ref2.norm() <= 1e-3 * tol);
+    Domain other = c.domain;
+    other.box.x() *= 1.01;
+    CHECK_THROWS_AS(moved.update_positions(x2, other), std::invalid_argument);
   }
 }
 
