@@ -23,7 +23,8 @@ struct AccuracyKnobs {
 };
 
 // The knobs for a solve at `level` (far-field solves keep far_field = mobility_cg = tolerance,
-// whose achieved error tests/test_mobility.cpp checks).
-AccuracyKnobs derive_knobs(double tolerance, HydroModel level);
+// whose achieved error tests/test_mobility.cpp checks). radius_ratio = a_max / a_min of the
+// particles (>= 1).
+AccuracyKnobs derive_knobs(double tolerance, HydroModel level, double radius_ratio = 1.0);
 
 }  // namespace stokesian

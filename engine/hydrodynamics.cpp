@@ -7,12 +7,12 @@
 namespace stokesian {
 
 Hydrodynamics::Hydrodynamics(const ResolvedModel& model, double viscosity, const AmbientFlow& flow, double tolerance,
-                             lubrication::NearFieldParams near_field)
+                             lubrication::NearFieldParams near_field, double radius_ratio)
     : model_(model), flow_(flow) {
   const SolverEntry* solver = hydro_solvers().find(solver_of(model_));
   if (!solver) throw std::invalid_argument("Hydrodynamics: no solver \"" + solver_of(model_) + "\"");
   SolverSetup setup;
-  setup.knobs = derive_knobs(tolerance, model_.level);
+  setup.knobs = derive_knobs(tolerance, model_.level, radius_ratio);
   setup.spec = MobilitySpec{model_.moments, viscosity, setup.knobs.far_field};
   setup.near_field = near_field;
   if (solver->needs_far_field) {

@@ -14,8 +14,9 @@ namespace stokesian {
 
 class Hydrodynamics {
  public:
+  // radius_ratio: a_max / a_min of the particles (accuracy knobs, engine/accuracy.hpp).
   Hydrodynamics(const ResolvedModel& model, double viscosity, const AmbientFlow& flow, double tolerance,
-                lubrication::NearFieldParams near_field = {});
+                lubrication::NearFieldParams near_field = {}, double radius_ratio = 1.0);
 
   // Set-up at a configuration; skipped when it equals the last prepared one.
   void prepare(const Configuration& c);

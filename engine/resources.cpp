@@ -144,7 +144,7 @@ ResourceEstimate estimate_resources(const Scene& s, const ResolvedModel& model) 
     } else if (model.far_field == "pme") {
       try {
         const ewald::Lattice lattice = ewald::Lattice::from_domain(s.domain);
-        const double ff_tol = derive_knobs(s.hydro.tolerance, model.level).far_field;  // as the run asks
+        const double ff_tol = derive_knobs(s.hydro.tolerance, model.level, a_max / a_min).far_field;  // as the run asks
         const ewald::PmeParameters p =
             ewald::pme_parameters(ff_tol, lattice, int(std::min(N, 2e9)), a_min, a_max, model.moments);
         const double G = double(p.grid[0]) * p.grid[1] * p.grid[2];

@@ -43,12 +43,20 @@ std::string closest_pairs(const std::vector<Vec3>& x, const std::vector<double>&
 }
 }  // namespace
 
+namespace {
+double radius_ratio(const std::vector<double>& a) {
+  if (a.empty()) return 1.0;
+  const auto [lo, hi] = std::minmax_element(a.begin(), a.end());
+  return *lo > 0.0 ? *hi / *lo : 1.0;
+}
+}  // namespace
+
 Simulation::Simulation(Scene scene)
     : scene_(std::move(scene)),
       model_(resolve_model(scene_)),
       strain_rate_(lattice_strain_rate(scene_.flow, scene_.domain)),
       hydro_(model_, scene_.fluid.viscosity, ambient_flow(scene_.flow), scene_.hydro.tolerance,
-             lubrication::near_field_params(scene_.hydro, model_.moments)),
+             lubrication::near_field_params(scene_.hydro, model_.moments), radius_ratio(scene_.radii)),
       integrator_(integrators().find(model_.integrator)->make(scene_.time)),
       observers_(make_observers(scene_, model_)) {}
 

@@ -1,17 +1,22 @@
 #pragma once
-// Interpolation: grid fields -> particle responses (last step of the PME product).
+// Interpolation: grid velocity field -> particle responses (last step of the PME product).
 //
-//     y_{p,c} = sum_i u_c(i) (W + c_p lap W)(i - M s_p),
-// c_p = a_p^2/6 for velocity components, a_p^2/10 for rotation and strain components, which
-// applies the truncated Faxen factor (1 - c_p k^2) of the response (window.hpp). Each particle
-// reads the grid only: parallel over particles, no conflicts, deterministic.
+// With u the velocity on the grid (3 fields, after the inverse transforms) and the windows of
+// window.hpp, per particle
+//     U = sum_g W^F u,     D_{bc} = sum_g (grad W^T)_b u_c,
+// whose main Fourier terms are (1 - a^2 k^2/6) u^ and -i k_b u^_c (1 - a^2 k^2/10) (the sign from the
+// adjoint of the spreading, spread.hpp), so
+//     Omega_a = -(1/2) eps_abc D_bc,   E_m = -B_m : D
+// (B_m the basis of engine/core/sym_traceless.hpp): rotation and strain come from the velocity alone.
+// Each particle reads the grid only (its ghost points must hold the periodic copies): parallel
+// over particles, no conflicts, deterministic.
 #include "ewald/window.hpp"
 
 #include <vector>
 
 namespace stokesian::ewald {
 
-// out (size N d) is overwritten; grid interleaved as in spread.hpp.
+// out (size N d) is overwritten; grid as in spread.hpp (3 fields, ghost points filled).
 void interpolate(const GridGeometry& g, const ParticleWindows& win, Moments m, const double* grid, VecX& out);
 
 }  // namespace stokesian::ewald

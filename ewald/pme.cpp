@@ -16,16 +16,20 @@
 namespace stokesian::ewald {
 
 // FFTW plans (made once per grid, FFTW_ESTIMATE so the plan -- hence the result -- does not depend
-// on timing) and the work arrays. The d fields are interleaved (spread.hpp); one strided plan
-// transforms one field and is executed for each field offset c (FFTW_UNALIGNED permits the offset
-// arrays), the d transforms running on different threads.
+// on timing) and the work arrays: 3 real fields of g.stored() doubles (rows padded to `row`, a
+// multiple of 4 so that every plane and field starts 32-byte aligned, as the new-array execute
+// functions require) and 3 complex half-spectra.
 struct PmeFarField::Fft {
-  fftw_plan forward = nullptr, backward = nullptr;
+  fftw_plan plane_r2c = nullptr, plane_c2r = nullptr;      // one direction-0 plane (2D)
+  fftw_plan cols_fwd = nullptr, cols_bwd = nullptr;        // kChunk direction-0 columns (1D)
+  fftw_plan rest_fwd = nullptr, rest_bwd = nullptr;        // the remaining columns of a field
+  static constexpr int kChunk = 8;
   double* real = nullptr;
   std::complex<double>* spectral = nullptr;
+  long nspec = 0, columns = 0, chunks = 0, rest = 0;
   ~Fft() {
-    if (forward) fftw_destroy_plan(forward);
-    if (backward) fftw_destroy_plan(backward);
+    for (fftw_plan q : {plane_r2c, plane_c2r, cols_fwd, cols_bwd, rest_fwd, rest_bwd})
+      if (q) fftw_destroy_plan(q);
     fftw_free(real);
     fftw_free(spectral);
   }
@@ -42,10 +46,26 @@ PmeFarField::PmeFarField(const std::vector<Vec3>& x, const std::vector<double>& 
 
 void PmeFarField::set_configuration(const Configuration& c) {
   // Same particles, radii, box and strain: keep parameters, grid and FFTW plans.
-  if (fft_ && radius_ == c.a && domain_ == c.domain)
+  if (fft_ && radius_ == c.a && domain_ == c.domain) {
     update_positions(c.x);
-  else
-    build(c.x, c.a, c.domain);
+    return;
+  }
+  // Only the strain moved and the parameters hold for every strain: new lattice, same grid and plans.
+  if (fft_ && radius_ == c.a && p_.sheared && c.domain.periodic() && c.domain.box == domain_.box &&
+      c.domain.shear_strain != 0.0 && long(c.x.size()) == n_) {
+    domain_ = c.domain;
+    set_lattice();
+    set_positions(c.x);
+    return;
+  }
+  build(c.x, c.a, c.domain);
+}
+
+void PmeFarField::set_lattice() {
+  lattice_ = Lattice::from_domain(domain_);
+  for (int d = 0; d < 3; ++d) grid_.J.row(d) = grid_.M[d] * lattice_.Ainv.row(d);
+  grid_.lap = grid_.J * grid_.J.transpose();
+  kernel_.build(grid_, lattice_, p_.xi, mu_);
 }
 
 void PmeFarField::build(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain) {
@@ -56,16 +76,21 @@ void PmeFarField::build(const std::vector<Vec3>& x, const std::vector<double>& a
   const double mu = mu_;
   const Moments m = m_;
   const auto [amin, amax] = std::minmax_element(a.begin(), a.end());
-  p_ = pme_parameters(tolerance_, lattice_, int(n_), *amin, *amax, m, options_);
+  PmeOptions opt = options_;
+  if (opt.self_scale2 <= 0.0) {
+    double s2 = 0.0;
+    for (double r : a) s2 += pme_self_scale2(r, m);
+    opt.self_scale2 = s2 / double(n_);
+  }
+  p_ = opt.fixed ? *opt.fixed : pme_parameters(tolerance_, lattice_, int(n_), *amin, *amax, m, opt);
   if (p_.support > 64) throw std::invalid_argument("PmeFarField: window support above 64 points");
 
   // Grid and windows in fractional coordinates.
   grid_.M = p_.grid;
   grid_.P = p_.support;
-  grid_.s = p_.width;
-  const Mat3 metric = lattice_.Ainv * lattice_.Ainv.transpose();
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) grid_.lap(i, j) = metric(i, j) * grid_.M[i] * grid_.M[j];
+  grid_.window = Window1D(p_.window, p_.support, p_.shape);
+  grid_.row = (grid_.M[2] + grid_.P + 3) / 4 * 4;
+  set_lattice();
   radius_ = a;
   set_positions(x);
   self_F_.resize(n_);
@@ -80,17 +105,34 @@ void PmeFarField::build(const std::vector<Vec3>& x, const std::vector<double>& a
 
   // FFTW arrays and plans.
   fft_ = std::make_unique<Fft>();
-  const int d = dof_per_particle(m);
-  const long npts = grid_.points(), nspec = long(grid_.M[0]) * grid_.M[1] * (grid_.M[2] / 2 + 1);
-  fft_->real = static_cast<double*>(fftw_malloc(sizeof(double) * npts * d));
-  fft_->spectral = static_cast<std::complex<double>*>(fftw_malloc(sizeof(fftw_complex) * nspec * d));
-  if (!fft_->real || !fft_->spectral) throw std::bad_alloc();
-  auto* spec = reinterpret_cast<fftw_complex*>(fft_->spectral);
-  const int dims[3] = {grid_.M[0], grid_.M[1], grid_.M[2]};
-  const unsigned flags = FFTW_ESTIMATE | FFTW_UNALIGNED;
-  fft_->forward = fftw_plan_many_dft_r2c(3, dims, 1, fft_->real, nullptr, d, 1, spec, nullptr, d, 1, flags);
-  fft_->backward = fftw_plan_many_dft_c2r(3, dims, 1, spec, nullptr, d, 1, fft_->real, nullptr, d, 1, flags);
-  if (!fft_->forward || !fft_->backward) throw std::runtime_error("PmeFarField: FFTW planning failed");
+  Fft& f = *fft_;
+  const int M0 = grid_.M[0], M1 = grid_.M[1], M2 = grid_.M[2], H2 = M2 / 2 + 1;
+  f.nspec = long(M0) * M1 * H2;
+  f.columns = long(M1) * H2;
+  f.chunks = f.columns / Fft::kChunk;
+  f.rest = f.columns % Fft::kChunk;
+  f.real = static_cast<double*>(fftw_malloc(sizeof(double) * grid_.stored() * 3));
+  f.spectral = static_cast<std::complex<double>*>(fftw_malloc(sizeof(fftw_complex) * f.nspec * 3));
+  if (!f.real || !f.spectral) throw std::bad_alloc();
+  auto* spec = reinterpret_cast<fftw_complex*>(f.spectral);
+  const int plane[2] = {M1, M2}, rembed[2] = {M1, grid_.row}, cembed[2] = {M1, H2};
+  const unsigned flags = FFTW_ESTIMATE;
+  f.plane_r2c = fftw_plan_many_dft_r2c(2, plane, 1, f.real, rembed, 1, 0, spec, cembed, 1, 0, flags);
+  f.plane_c2r = fftw_plan_many_dft_c2r(2, plane, 1, spec, cembed, 1, 0, f.real, rembed, 1, 0, flags);
+  const int col[1] = {M0};
+  const int stride = int(f.columns);
+  f.cols_fwd = fftw_plan_many_dft(1, col, Fft::kChunk, spec, nullptr, stride, 1, spec, nullptr, stride, 1,
+                                  FFTW_FORWARD, flags);
+  f.cols_bwd = fftw_plan_many_dft(1, col, Fft::kChunk, spec, nullptr, stride, 1, spec, nullptr, stride, 1,
+                                  FFTW_BACKWARD, flags);
+  if (f.rest > 0) {
+    f.rest_fwd = fftw_plan_many_dft(1, col, int(f.rest), spec, nullptr, stride, 1, spec, nullptr, stride, 1,
+                                    FFTW_FORWARD, flags);
+    f.rest_bwd = fftw_plan_many_dft(1, col, int(f.rest), spec, nullptr, stride, 1, spec, nullptr, stride, 1,
+                                    FFTW_BACKWARD, flags);
+  }
+  if (!f.plane_r2c || !f.plane_c2r || !f.cols_fwd || !f.cols_bwd || (f.rest > 0 && (!f.rest_fwd || !f.rest_bwd)))
+    throw std::runtime_error("PmeFarField: FFTW planning failed");
 }
 
 void PmeFarField::set_positions(const std::vector<Vec3>& x) {
@@ -135,16 +177,43 @@ void PmeFarField::update_positions(const std::vector<Vec3>& x) {
 PmeFarField::~PmeFarField() = default;
 
 void PmeFarField::apply_wave(const VecX& in, VecX& out) const {
-  const int d = dof_per_particle(m_);
-  spread(grid_, windows_, colouring_, m_, in, fft_->real);
-  auto* spec = reinterpret_cast<fftw_complex*>(fft_->spectral);
-  // The d transforms are independent: one per thread (fftw_execute_* is thread-safe).
+  Fft& f = *fft_;
+  const int M0 = grid_.M[0], M1 = grid_.M[1], M2 = grid_.M[2], H2 = M2 / 2 + 1;
+  const long stored = grid_.stored(), plane_real = long(M1) * grid_.row, plane_spec = long(M1) * H2;
+  auto* spec = reinterpret_cast<fftw_complex*>(f.spectral);
+  const long units = f.chunks + (f.rest > 0 ? 1 : 0);  // column blocks per field
+  // Column blocks of one field: kChunk columns each, the last one `rest`.
+  auto columns = [&](long item, bool forward) {
+    const long c = item / units, b = item % units;
+    fftw_complex* at = spec + c * f.nspec + b * Fft::kChunk;
+    if (b < f.chunks) fftw_execute_dft(forward ? f.cols_fwd : f.cols_bwd, at, at);
+    else fftw_execute_dft(forward ? f.rest_fwd : f.rest_bwd, at, at);
+  };
+
+  spread(grid_, windows_, colouring_, m_, in, f.real);
 #pragma omp parallel for schedule(static)
-  for (int c = 0; c < d; ++c) fftw_execute_dft_r2c(fft_->forward, fft_->real + c, spec + c);
-  apply_fourier_kernel(grid_, lattice_, p_.xi, mu_, m_, fft_->spectral);
+  for (long item = 0; item < 3L * M0; ++item) {
+    const long c = item / M0, i0 = item % M0;
+    fftw_execute_dft_r2c(f.plane_r2c, f.real + c * stored + i0 * plane_real, spec + c * f.nspec + i0 * plane_spec);
+  }
 #pragma omp parallel for schedule(static)
-  for (int c = 0; c < d; ++c) fftw_execute_dft_c2r(fft_->backward, spec + c, fft_->real + c);
-  interpolate(grid_, windows_, m_, fft_->real, out);
+  for (long item = 0; item < 3 * units; ++item) columns(item, true);
+  kernel_.apply(f.spectral, f.nspec);
+#pragma omp parallel for schedule(static)
+  for (long item = 0; item < 3 * units; ++item) columns(item, false);
+#pragma omp parallel for schedule(static)
+  for (long item = 0; item < 3L * M0; ++item) {
+    const long c = item / M0, i0 = item % M0;
+    fftw_execute_dft_c2r(f.plane_c2r, spec + c * f.nspec + i0 * plane_spec, f.real + c * stored + i0 * plane_real);
+  }
+  // Ghost points of every direction-2 row: the periodic copies of its start.
+  const int ghosts = grid_.P - 1;
+#pragma omp parallel for schedule(static)
+  for (long r = 0; r < 3L * M0 * M1; ++r) {
+    double* v = f.real + r * grid_.row;
+    for (int l = 0; l < ghosts; ++l) v[M2 + l] = v[l];
+  }
+  interpolate(grid_, windows_, m_, f.real, out);
 }
 
 PairScalars PmeFarField::entry_scalars(long i, int t) const {

@@ -4,19 +4,23 @@
 // overlap-regularised kernel kept in the real part).
 //
 // Product, per call [docs/ewald.md s.3; cf. Sierou & Brady 2001; Lindbo & Tornberg 2010]:
-//   wave part: spread F, T, S with the Gaussian window + Faxen Laplacian (spread.hpp), FFTW r2c,
-//              multiply by the Fourier kernel (kernel.hpp), FFTW c2r, interpolate U, Omega, E
-//              (interpolate.hpp);
+//   wave part: spread the force density of F, T, S with the window and its gradient (3 grid fields
+//              for every moment level, spread.hpp), 3D FFT, Oseen multiply and deconvolution
+//              (kernel.hpp), inverse FFT, interpolate U and the velocity gradient (rotation, strain)
+//              with the same windows (interpolate.hpp);
 //   real part: sum over pairs with |r| < cutoff_gap + a_i + a_j of the real-space blocks
 //              (ewald_split.hpp), pairs from trees::neighbor_pairs (minimum image, Lees-Edwards);
 //   self part: M_self_free - wave(r = 0) per particle.
+// FFTs: the 3D transform is split into 2D transforms of the direction-0 planes and 1D transforms of
+// fixed blocks of direction-0 columns, each planned once (FFTW_ESTIMATE) and distributed over the
+// OpenMP threads; every sub-transform is computed by the same plan whatever the thread count.
 // Everything that depends only on the configuration (windows, slab colouring, pair scalars, FFTW
-// plans) is prepared by set_configuration (or the configuration constructor): parameters, grid
-// and plans are kept while particles, radii, box and strain are unchanged, so under shear they are
-// remade once per strain. apply() is then repeatable and its result is independent
-// of the number of OpenMP threads. apply() uses work arrays owned by the object: one product at a
-// time per object (it parallelises internally). Construct objects from one thread at a time (FFTW
-// planning is not thread-safe). All parameters come from the tolerance (pme_parameters.hpp).
+// plans, kernel factors) is prepared by set_configuration (or the configuration constructor):
+// parameters, grid, plans and kernel factors are kept while particles, radii, box and strain are
+// unchanged. apply() is then repeatable and its result is independent of the number of OpenMP
+// threads. apply() uses work arrays owned by the object: one product at a time per object (it
+// parallelises internally). Construct objects from one thread at a time (FFTW planning is not
+// thread-safe). All parameters come from the tolerance (pme_parameters.hpp).
 // Lees-Edwards: the grid lives on fractional coordinates of the sheared lattice (lattice.hpp) and
 // the kernel uses the sheared reciprocal vectors; the strain is reduced first, so the operator is
 // exactly periodic in the strain.
@@ -24,6 +28,7 @@
 #include "engine/kernels/mobility_pair.hpp"
 #include "ewald/lattice.hpp"
 #include "ewald/pme_parameters.hpp"
+#include "ewald/kernel.hpp"
 #include "ewald/spread.hpp"
 
 #include <memory>
@@ -69,6 +74,7 @@ class PmeFarField final : public MobilityOperator {
   mobility::PairScalars entry_scalars(long i, int t) const;
   void build(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain);
   void set_positions(const std::vector<Vec3>& x);
+  void set_lattice();  // lattice, window derivatives' metric and Fourier kernel for domain_
   struct Fft;
   long n_;
   double mu_;
@@ -88,6 +94,7 @@ class PmeFarField final : public MobilityOperator {
   // Scalars per neighbour-list entry, kept when they fit in kCacheBytes; else computed per apply.
   std::vector<mobility::PairScalars> cache_;
   static constexpr std::size_t kCacheBytes = std::size_t(128) << 20;
+  FourierKernel kernel_;
   std::unique_ptr<Fft> fft_;
 };
 

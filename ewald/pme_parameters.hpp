@@ -2,33 +2,39 @@
 // PME parameters from one tolerance: the only place where accuracy is turned into numbers
 // (docs/ewald.md s.4 derives each line; s.5 has the measured errors).
 //
-// With L = ln(10 / tol) (one factor 10 of safety for sums over particles):
-//  1. Real-space cutoff r_c (gap): about `neighbours` particles inside at the mean density, bounded
-//     by the minimum-image contract of trees::neighbor_pairs (r_c + 2 a_max <= L_min / 2).
-//  2. Splitting xi: the smallest value for which every real-space scalar of a neglected pair, at the
-//     closest distance r_c + a_i + a_j, is below e^{-L} times the smallest self mobility (E9). The
-//     scalars themselves are evaluated because their polynomial prefactors (up to (xi a)^3 x^4 e^{-x^2})
-//     depend on the radii and the moments.
-//  3. Wave-space truncation: the Hasimoto factor (1 + q) e^{-q}, q = k^2 / (4 xi^2), is below e^{-L}
-//     for k > k_max; the grid holds |n_d| <= k_max |a_d| / (2 pi) per lattice direction, oversampled
-//     by beta: M_d >= 2 beta n_max,d (FFT-friendly sizes 2^a 3^b 5^c).
-//  4. Window width s (grid units), from aliasing: the alias of mode nu = n / M relative to nu is
-//     exp(-2 pi^2 s^2 (1 - 2 nu)), weighted by the kernel exp(-La (2 beta nu)^2); the worst nu gives
-//     2 t - t^2 / (beta^2 La) >= La with t = pi^2 s^2, smallest for t = beta^2 La (1 - sqrt(1 - 1/beta^2))
-//     (E10; cf. the same trade-off in the parameters m, P of Lindbo & Tornberg 2010).
-//     La = L + ln 10 + ln sqrt(M0 M1 M2) (aliasing errors of all modes add with random phases)
-//     + ln(1 + a_max^2 k_max^2 / 6) (Faxen factor of the modes near k_max) + ln max(1, 2 (xi a_max)^3)
-//     (share of the wave part in the torque/stresslet self terms).
-//  5. Support P from truncation: exp(-(P/2)^2 / (2 s^2)) (1 + edge Laplacian term) <= e^{-Lt},
-//     Lt = L + ln 10 + ln max(1, 2 (xi a_max)^3) (one window per particle: no sum over modes).
-// Why Gaussians: their transform is analytic, so the deconvolution is exact on sheared grids
-// (the window is separable in fractional coordinates, transform exp(-2 pi^2 sum (s n_d / M_d)^2)),
-// and the Faxen Laplacian of the window is analytic too (window.hpp). The exponential of
-// semicircle would need roughly half the points per direction at equal accuracy (8x fewer in 3D)
-// but a numerical transform and a numerical Laplacian; B-splines alias more and need larger grids.
+// Error model. For a random input x (unit variance per component) and particles at random
+// positions of number density rho, the error of one output particle of y = M x has mean square
+// e^2 = sum_j ||dM_ij||_F^2, where dM is what each approximation leaves out; it is compared with
+// S^2 = sum_c (self mobility of component c)^2 (the size of (M x)_i), radius a_max (largest
+// particle: the slowest self terms and the largest Faxen factors). With ||.||_F the Frobenius norm:
+//   real space (pairs beyond the cutoff r_c = cutoff_gap + a_i + a_j; the largest of the radius
+//   pairs (a_min, a_min), (a_min, a_max), (a_max, a_max)):
+//     e_R^2 = rho int_{r_c}^inf 4 pi r^2 ||B_real(r)||_F^2 dr               (blocks of ewald_split.hpp)
+//   wave truncation (modes outside the grid, |k| > k_in = min_d pi M_d / |a_d|):
+//     e_K^2 = rho / (2 pi)^3 int_{|k|>k_in} 4 pi k^2 g(k)^2 2 alpha(k)^2 dk,   g = H(k) / (mu k^2)
+//   window aliasing (spreading and interpolation, nearest aliases k_m = k + m K_d e_d, K_d = 2 pi M_d / |a_d|):
+//     e_A^2 = 2 rho / (2 pi)^3 sum_d sum_{m = +-1} int_box g(k)^2 alpha(k) [2 alpha(k_m) + beta(k_m) |P_k k_m|^2]
+//             (phihat(nu_d + m) / phihat(nu_d))^2 d^3k,   nu_d = k_d / K_d,
+// where R(k)^+ R(k) = alpha(k) I + beta(k) k k^T collects the response operator of ewald_split.hpp
+// (Faxen factors P_F = 1 - a^2 k^2 / 6, P_T = 1 - a^2 k^2 / 10):
+//     F: alpha = P_F^2, beta = 0;  FT: alpha = P_F^2 + k^2 P_T^2 / 4, beta = -P_T^2 / 4;
+//     FTS: alpha = P_F^2 + 3 k^2 P_T^2 / 4, beta = -P_T^2 / 12,
+// so that ||R(k) G(k) R(k')^+||_F^2 = g^2 alpha(k) tr(P_k (alpha(k') I + beta(k') k' k'^T)) in closed form
+// (P_k = I - k k / k^2). The aliasing integral is done in cylindrical coordinates around e_d, about
+// which k and k_m rotate together. Each part gets a third of (kSafety tol)^2 S^2; kSafety
+// (pme_parameters.cpp) is the one calibration constant, set from the measured errors so that the
+// achieved error lies between tol / 10 and tol (docs/ewald.md s.5).
+// Cost model. Among all (cutoff, grid upsampling sigma, support P, window shape) meeting the three
+// bounds, the cheapest per product by
+//     t = c_pair(m) pairs + 2 c_point(m) N P^3 + 6 c_fft G log2 G + c_grid G,   G = M0 M1 M2,
+// with the constants measured on the reference machine (bench_ewald, docs/benchmarks.md).
+// Lees-Edwards: the grid and all parameters are chosen for the longest reduced a_2 (|gamma'| = Lx / (2 Ly)),
+// so they do not change with the strain (the FFT plans are kept while the box shears).
 #include "ewald/lattice.hpp"
+#include "ewald/window.hpp"
 
 #include <array>
+#include <optional>
 
 namespace stokesian::ewald {
 
@@ -38,24 +44,44 @@ struct PmeParameters {
   double cutoff_gap = 1.0;      // real-space cutoff: pairs with |r| < cutoff_gap + a_i + a_j [a]
   std::array<int, 3> grid{};    // FFT grid M_d along the lattice directions
   int support = 4;              // window points per direction P
-  double width = 1.0;           // Gaussian standard deviation s [grid spacings]
-  double k_max = 1.0;           // largest |k| kept by the Hasimoto factor [1/a]
+  WindowKind window = WindowKind::kaiser_bessel;
+  double shape = 1.0;           // Kaiser-Bessel beta, or Gaussian standard deviation [grid spacings]
+  double k_max = 1.0;           // radius of the sphere of wave vectors resolved by the grid [1/a]
+  bool sheared = false;         // chosen for every strain (Lees-Edwards)
+  // Model estimates (relative to S, see above) and the modelled cost [s] per product.
+  double est_real = 0, est_wave = 0, est_alias = 0, est_cost = 0;
 };
 
 struct PmeOptions {
-  // Target particles inside the real-space cutoff sphere; 0 = automatic, P^3 / 8 (measured cost
-  // balance: one real-space pair costs about as much as 8 window points of the wave part; at
-  // most 400 to bound the memory of the pair list).
+  // Particles inside the real-space cutoff sphere; 0 = chosen by the cost model.
   double neighbours = 0.0;
-  double beta = 1.4;         // k-space oversampling (3 above)
+  // Grid upsampling sigma (grid points / those needed to resolve k_in); 0 = chosen by the cost model.
+  double sigma = 0.0;
+  WindowKind window = WindowKind::kaiser_bessel;
+  // Mean square self scale S^2 of the particles (see above); 0 = that of radius a_max.
+  double self_scale2 = 0.0;
+  // Use these parameters as they are (tests and benchmarks that probe the model's parts).
+  std::optional<PmeParameters> fixed;
 };
 
 // Parameters for tolerance tol in [1e-14, 0.1] for n particles with radii in [a_min, a_max].
+// A lattice with a non-zero strain gets strain-independent parameters (see above).
 // Throws std::invalid_argument if the box is too small for the minimum-image real-space sum.
 PmeParameters pme_parameters(double tol, const Lattice& lattice, int n, double a_min, double a_max, Moments m,
                              const PmeOptions& opt = {});
 
 // Smallest integer >= n of the form 2^a 3^b 5^c with a >= 1 (even, FFT-friendly).
 int fft_size(int n);
+
+// The model's parts, exposed for tests and benchmarks: e_R^2, e_K^2, e_A^2 (not divided by S^2)
+// for radius a, density rho and moments m.
+double pme_real_error2(double cutoff_gap, double xi, double a_i, double a_j, double rho, Moments m);
+double pme_wave_error2(double k_in, double xi, double a, double rho, Moments m);
+double pme_alias_error2(const std::array<int, 3>& M, const Vec3& lengths, const Window1D& w, double xi, double a,
+                        double rho, Moments m);
+double pme_self_scale2(double a, Moments m);
+// Relative error from the jumps of the truncated window and its derivatives at |delta| = P/2
+// (grid_density: grid points per unit length).
+double pme_edge_error(const Window1D& w, double grid_density, double a, Moments m);
 
 }  // namespace stokesian::ewald

@@ -1,17 +1,26 @@
 #pragma once
-// Spreading: particle moments -> grid fields (step 1 of the PME product).
+// Spreading: particle moments -> force density on the grid (step 1 of the PME product).
 //
-// Field c (c = 0..d-1 in the particle layout [F(3) T(3) S(5)]) receives
-//     rho_c(i) = sum_p x_{p,c} (W + c_p lap W)(i - M s_p),
-// with c_p = a_p^2/6 for force components and a_p^2/10 for torque and stresslet components
-// (window.hpp). Its DFT is then sum_p x_{p,c} (1 - c_p k^2) W^(n) e^{-i k . x_p} up to aliasing,
-// with no volume or grid-size factors.
+// The point-force density of the sources (docs/ewald.md (E2)), f(k) = F + (i/2) k x T - i S k, is in
+// real space F delta + Q grad delta with Q = -(1/2)[T]x - S ([T]x v = T x v). With the window and the
+// truncated Faxen factors (window.hpp) the three grid fields are
+//     rho(x_g) = sum_p [ F_p W^F_p(x_g) + Q_p grad W^T_p(x_g) ],   W^F = W + (a^2/6) lap W,  W^T = W + (a^2/10) lap W,
+// whose DFT is sum_p [F_p (1 - a^2 k^2/6) + Q_p (i k)(1 - a^2 k^2/10)] What(n) e^{-i k.x_p} up to aliasing.
+// So torques and stresslets need no grid fields of their own: F, FT and FTS all spread 3 fields
+// (and 3 inverse transforms come back, interpolate.hpp). grad_x = J^T grad_delta, so Q J^T is
+// formed once per particle and the window's delta-gradient is used at the grid points.
+// Weights per direction-2 row (j0, j1 fixed): W^F = f0 c0 + f1 c1 + f2 c2 and each delta-derivative
+// of W^T = t0 c0 + .. + t3 c3 with c_k = phi^(k) along direction 2 and coefficients from the other
+// two directions: separable evaluation, P^2 coefficient sets and P^3 multiply-adds per field.
+// Layout: each field is M0 x M1 rows of `row` = M2 + P doubles; a window never wraps along
+// direction 2 but runs into the P - 1 ghost points after M2, which are folded back after spreading
+// (and filled from the periodic values before interpolating), so the innermost loops are contiguous.
 // Write conflicts (OpenMP): the grid is cut along direction 0 into an even number of slabs at least P
 // points wide; a particle belongs to the slab of its first window index, so its window touches only
 // its slab and the next. Slabs of one parity never touch each other's targets: all even slabs are
-// spread in parallel, then all odd slabs. Within a slab particles are taken in index order, so every
-// grid value is summed in an order fixed by the configuration: results are bitwise independent of
-// the thread count. Fewer than two slabs (tiny grids): serial.
+// spread in parallel, then all odd slabs. Within a slab particles are taken in a fixed order (sorted
+// by their direction-1 and -2 window starts, for locality), so every grid value is summed in an
+// order fixed by the configuration: results are bitwise independent of the thread count.
 #include "ewald/window.hpp"
 
 #include <vector>
@@ -20,16 +29,23 @@ namespace stokesian::ewald {
 
 struct SlabColouring {
   int slabs = 1;
-  std::vector<std::vector<long>> members;  // particles per slab, ascending
+  std::vector<std::vector<long>> members;  // particles per slab, in spreading order
 };
 SlabColouring colour_slabs(const GridGeometry& g, const ParticleWindows& win);
 
-// grid: g.points() * d doubles, interleaved (value of field c at point i is grid[i * d + c],
-// d = dof_per_particle(m)), so one window point updates d adjacent values; overwritten.
+// Weights of particle p on the row (j0, j1) of its window: wF[l] and the delta-gradient of W^T,
+// gd[3][l] (only wF when with_gradient is false). l = 0..P-1 along direction 2.
+void row_weights(const GridGeometry& g, const ParticleWindows& win, long p, int j0, int j1, bool with_gradient,
+                 double* wF, double (*gd)[64]);
+
+// grid: 3 fields of g.stored() doubles each (field c at grid + c * g.stored()); overwritten,
+// ghost points folded. `in` has dof_per_particle(m) values per particle, [F(3) T(3) S(5)].
 void spread(const GridGeometry& g, const ParticleWindows& win, const SlabColouring& colouring, Moments m,
             const VecX& in, double* grid);
 
-// The P^3 grid indices of particle p's window (row-major over j0, j1, j2), wrapped.
-void window_indices(const GridGeometry& g, const ParticleWindows& win, long p, long* idx);
+// Row-major offset of point (i0, i1, i2) in a field, i2 in [0, M2 + P - 1).
+inline long grid_offset(const GridGeometry& g, int i0, int i1, int i2) {
+  return (long(i0) * g.M[1] + i1) * g.row + i2;
+}
 
 }  // namespace stokesian::ewald

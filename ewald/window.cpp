@@ -1,9 +1,85 @@
-// Gaussian window with Faxen Laplacian; definitions in window.hpp.
+// PME windows; definitions in window.hpp.
 #include "ewald/window.hpp"
 
 #include <cmath>
+#include <stdexcept>
 
 namespace stokesian::ewald {
+
+const char* to_string(WindowKind k) { return k == WindowKind::kaiser_bessel ? "kaiser_bessel" : "gaussian"; }
+
+Window1D::Window1D(WindowKind kind, int support, double shape) : kind_(kind), P_(support), shape_(shape) {
+  if (support < 2 || !(shape > 0.0)) throw std::invalid_argument("Window1D: support < 2 or shape <= 0");
+  if (kind != WindowKind::kaiser_bessel) return;
+  // Power series of I0(beta sqrt(v)) in v; all terms positive, so the sum is accurate to rounding.
+  const double q = shape * shape / 4.0;
+  std::vector<double> c{1.0};
+  double sum = 1.0;
+  for (int k = 1;; ++k) {
+    c.push_back(c.back() * q / (double(k) * k));
+    sum += c.back();
+    if (k > shape && c.back() < 1e-18 * sum) break;
+  }
+  const int K = int(c.size());
+  for (int j = 0; j < 4; ++j) {
+    coef_[j].assign(std::max(1, K - j), 0.0);
+    for (int k = 0; k + j < K; ++k) {
+      double f = c[k + j] / sum;  // c_{k+j} (k+j)! / k!
+      for (int t = k + 1; t <= k + j; ++t) f *= t;
+      coef_[j][k] = f;
+    }
+  }
+}
+
+void Window1D::derivatives(double delta, double out[4]) const {
+  const double half = 0.5 * P_;
+  if (std::abs(delta) > half) {
+    out[0] = out[1] = out[2] = out[3] = 0.0;
+    return;
+  }
+  if (kind_ == WindowKind::gaussian) {
+    const double s2 = shape_ * shape_, u = delta / s2;
+    const double w = std::exp(-0.5 * delta * u);
+    out[0] = w;
+    out[1] = -u * w;
+    out[2] = (u * u - 1.0 / s2) * w;
+    out[3] = (3.0 * u / s2 - u * u * u) * w;
+    return;
+  }
+  // phi(z) = F(v), v = 1 - z^2, z = delta / half; derivatives in z, then d/d delta = (1/half) d/dz.
+  const double z = delta / half, v = 1.0 - z * z;
+  double F[4];
+  for (int j = 0; j < 4; ++j) {
+    const auto& c = coef_[j];
+    double acc = 0.0;
+    for (int k = int(c.size()) - 1; k >= 0; --k) acc = acc * v + c[k];
+    F[j] = acc;
+  }
+  const double h = 1.0 / half;
+  out[0] = F[0];
+  out[1] = h * (-2.0 * z * F[1]);
+  out[2] = h * h * (4.0 * z * z * F[2] - 2.0 * F[1]);
+  out[3] = h * h * h * (12.0 * z * F[2] - 8.0 * z * z * z * F[3]);
+}
+
+double Window1D::value(double delta) const {
+  double d[4];
+  derivatives(delta, d);
+  return d[0];
+}
+
+double Window1D::transform(double nu) const {
+  if (kind_ == WindowKind::gaussian)
+    return std::sqrt(2.0 * kPi) * shape_ * std::exp(-2.0 * kPi * kPi * shape_ * shape_ * nu * nu);
+  // int_{-1}^{1} I0(beta sqrt(1 - z^2)) e^{-i w z} dz = 2 sinh(r) / r, r = sqrt(beta^2 - w^2); scaled
+  // by half = P/2 (dz = d delta / half) and 1 / I0(beta) (the normalisation of phi).
+  const double w = kPi * P_ * nu, d = shape_ * shape_ - w * w;
+  double ratio;
+  if (std::abs(d) < 1e-6) ratio = 1.0 + d / 6.0;
+  else if (d > 0.0) ratio = std::sinh(std::sqrt(d)) / std::sqrt(d);
+  else ratio = std::sin(std::sqrt(-d)) / std::sqrt(-d);
+  return P_ * ratio * coef_[0][0];  // coef_[0][0] = 1 / I0(beta)
+}
 
 ParticleWindows make_windows(const GridGeometry& g, const std::vector<Vec3>& s_frac, const std::vector<double>& a) {
   const long n = long(s_frac.size());
@@ -11,10 +87,10 @@ ParticleWindows make_windows(const GridGeometry& g, const std::vector<Vec3>& s_f
   ParticleWindows win;
   win.P = P;
   win.start.resize(n);
-  win.w.resize(std::size_t(n) * 9 * P);
+  win.w.resize(std::size_t(n) * 12 * P);
   win.cF.resize(n);
   win.cT.resize(n);
-  const double s2 = g.s * g.s, norm = 1.0 / (std::sqrt(2.0 * kPi) * g.s);
+#pragma omp parallel for schedule(static)
   for (long p = 0; p < n; ++p) {
     win.cF[p] = a[p] * a[p] / 6.0;
     win.cT[p] = a[p] * a[p] / 10.0;
@@ -23,43 +99,15 @@ ParticleWindows make_windows(const GridGeometry& g, const std::vector<Vec3>& s_f
       const double pos = u * g.M[d];  // particle position in grid units, [0, M)
       const int i0 = int(std::ceil(pos - 0.5 * P));
       win.start[p][d] = ((i0 % g.M[d]) + g.M[d]) % g.M[d];
-      double* w0 = win.w.data() + ((p * 3 + d) * 3 + 0) * P;
-      double* w1 = w0 + P;
-      double* w2 = w1 + P;
+      double* w = win.w.data() + (p * 3 + d) * 4 * P;
       for (int j = 0; j < P; ++j) {
-        const double delta = (i0 + j) - pos;
-        const double w = norm * std::exp(-0.5 * delta * delta / s2);
-        w0[j] = w;
-        w1[j] = -delta / s2 * w;
-        w2[j] = (delta * delta / s2 - 1.0) / s2 * w;
+        double v[4];
+        g.window.derivatives((i0 + j) - pos, v);
+        for (int t = 0; t < 4; ++t) w[t * P + j] = v[t];
       }
     }
   }
   return win;
-}
-
-void window_weights(const GridGeometry& g, const ParticleWindows& win, long p, double* wF, double* wT) {
-  const int P = g.P;
-  const double *x0 = win.at(p, 0, 0), *x1 = win.at(p, 0, 1), *x2 = win.at(p, 0, 2);
-  const double *y0 = win.at(p, 1, 0), *y1 = win.at(p, 1, 1), *y2 = win.at(p, 1, 2);
-  const double *z0 = win.at(p, 2, 0), *z1 = win.at(p, 2, 1), *z2 = win.at(p, 2, 2);
-  const Mat3& G = g.lap;
-  const double cF = win.cF[p], cT = win.cT[p];
-  long q = 0;
-  for (int i = 0; i < P; ++i)
-    for (int j = 0; j < P; ++j) {
-      // Terms of lap W grouped by their z factor: z0 (xx, yy, xy), z1 (xz, yz), z2 (zz).
-      const double base = x0[i] * y0[j];
-      const double l0 = G(0, 0) * x2[i] * y0[j] + G(1, 1) * x0[i] * y2[j] + 2.0 * G(0, 1) * x1[i] * y1[j];
-      const double l1 = 2.0 * (G(0, 2) * x1[i] * y0[j] + G(1, 2) * x0[i] * y1[j]);
-      const double l2 = G(2, 2) * base;
-      for (int k = 0; k < P; ++k, ++q) {
-        const double w = base * z0[k];
-        const double lap = l0 * z0[k] + l1 * z1[k] + l2 * z2[k];
-        wF[q] = w + cF * lap;
-        wT[q] = w + cT * lap;
-      }
-    }
 }
 
 }  // namespace stokesian::ewald

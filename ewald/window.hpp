@@ -1,18 +1,29 @@
 #pragma once
-// Gaussian window of the PME far field, evaluated per particle on the grid of fractional coordinates.
+// Window of the PME far field: a separable, compactly supported function on the grid of fractional
+// coordinates, evaluated per particle with its first three derivatives.
 //
 // The grid has M_d points along lattice direction d (fractional s_d = i_d / M_d). A particle at
 // fractional position s_p touches the P points i = i0 .. i0 + P - 1 per direction with
-// i0 = ceil(M s_p - P/2) (indices taken modulo M), at offsets delta = i - M s_p in grid units. The
-// window is separable in fractional coordinates,
-//     W(x) = prod_d omega(delta_d),   omega(delta) = exp(-delta^2 / (2 s^2)) / (sqrt(2 pi) s),
-// (unit sum over the grid), with transform W^(n) = prod_d exp(-2 pi^2 s^2 n_d^2 / M_d^2)
-// [docs/ewald.md (E7)]. On a sheared lattice it is an anisotropic Gaussian
-// in x, which the deconvolution by W^(n)^2 handles exactly.
-// Faxen factors: the spreading/interpolation kernel of a particle of radius a is W + c lap W with
-// c = a^2/6 (force/velocity) or a^2/10 (torque, stresslet / rotation, strain), whose transform is
-// (1 - c k^2) W^ -- the truncated Faxen factor of ewald_split.hpp. In grid units
-//     lap = sum_ij Gt_ij d/d delta_i d/d delta_j,   Gt_ij = (A^{-1} A^{-T})_ij M_i M_j.
+// i0 = ceil(M s_p - P/2) (indices taken modulo M), at offsets delta = i - M s_p in grid units, and
+//     W(x_g - x_p) = prod_d phi(delta_d),   |delta_d| <= P/2.
+// Its continuous transform is What(n) = prod_d phihat(n_d / M_d), phihat(nu) = int phi(t) e^{-2 pi i nu t} dt;
+// the DFT over the grid of W(x_g - x_p) is What(n) e^{-i k.x_p} plus aliases (Poisson summation), so
+// dividing by What^2 in Fourier space undoes spreading and interpolation [docs/ewald.md (E7)].
+// Windows (docs/pme_windows.md compares them):
+//   Kaiser-Bessel   phi = I0(beta sqrt(1 - z^2)) / I0(beta),  z = 2 delta / P;
+//                   phihat = (P / I0(beta)) sinh(sqrt(beta^2 - w^2)) / sqrt(beta^2 - w^2),  w = pi P nu
+//                   (sin form for w > beta) [Kaiser 1966; Jackson et al. 1991, IEEE TMI 10, 473].
+//                   I0(beta sqrt(v)) is an entire function of v = 1 - z^2, so every derivative is
+//                   smooth up to the support edge (unlike the exponential of semicircle, whose first
+//                   derivative is infinite there): the Faxen Laplacian and the gradient windows below
+//                   stay accurate.
+//   Gaussian        phi = exp(-delta^2 / (2 s^2)),  phihat = sqrt(2 pi) s exp(-2 pi^2 s^2 nu^2)
+//                   (the truncation at P/2 is not in phihat; it is part of the window error).
+// Physical derivatives: with J = diag(M) A^{-1} (grid units per unit length along x),
+//     grad_x W = J^T grad_delta W,   lap W = sum_ij Gt_ij d_i d_j W,   Gt = J J^T.
+// Faxen factors: a particle of radius a spreads/interpolates with W + c lap W, c = a^2/6 (force,
+// velocity) or a^2/10 (torque, stresslet / rotation, strain), whose transform is (1 - c k^2) What:
+// the truncated Faxen factors of ewald_split.hpp, exact for every radius.
 #include "engine/core/types.hpp"
 
 #include <array>
@@ -20,30 +31,55 @@
 
 namespace stokesian::ewald {
 
-struct GridGeometry {
-  std::array<int, 3> M{};  // grid points per lattice direction
-  int P = 4;               // support (points per direction)
-  double s = 1.0;          // Gaussian standard deviation [grid spacings]
-  Mat3 lap = Mat3::Zero(); // Gt: the physical Laplacian in grid-unit derivatives
-  long points() const { return long(M[0]) * M[1] * M[2]; }
-  long index(int i, int j, int k) const { return (long(i) * M[1] + j) * M[2] + k; }
+enum class WindowKind { kaiser_bessel, gaussian };
+const char* to_string(WindowKind k);
+
+// One-dimensional window: support P points, shape beta (Kaiser-Bessel) or width s = beta (Gaussian,
+// grid spacings).
+class Window1D {
+ public:
+  Window1D() = default;
+  Window1D(WindowKind kind, int support, double shape);
+  WindowKind kind() const { return kind_; }
+  int support() const { return P_; }
+  double shape() const { return shape_; }
+  // phi^(0..3) at offset delta (grid units); zero outside |delta| <= P/2.
+  void derivatives(double delta, double out[4]) const;
+  double value(double delta) const;
+  // Continuous transform phihat(nu), nu in cycles per grid spacing.
+  double transform(double nu) const;
+
+ private:
+  WindowKind kind_ = WindowKind::kaiser_bessel;
+  int P_ = 0;
+  double shape_ = 0.0;
+  // Kaiser-Bessel: phi(z) = f(1 - z^2) / I0(beta), f(v) = sum_k c_k v^k, c_k = (beta^2/4)^k / (k!)^2;
+  // coef_[j] holds the coefficients of f^(j) divided by I0(beta).
+  std::array<std::vector<double>, 4> coef_;
 };
 
-// Window data of all particles: first index i0 per direction and omega, omega', omega'' at the
-// P offsets, per direction; cF = a^2/6 and cT = a^2/10 per particle.
+struct GridGeometry {
+  std::array<int, 3> M{};      // grid points per lattice direction
+  int P = 4;                   // support (points per direction)
+  Window1D window;
+  Mat3 J = Mat3::Identity();   // diag(M) A^{-1}
+  Mat3 lap = Mat3::Zero();     // Gt = J J^T
+  int row = 0;                 // stored length of a direction-2 row: M2 + P (ghost points, spread.hpp)
+  long points() const { return long(M[0]) * M[1] * M[2]; }
+  long stored() const { return long(M[0]) * M[1] * row; }
+};
+
+// Window data of all particles: first index i0 per direction and phi^(0..3) at the P offsets per
+// direction; cF = a^2/6 and cT = a^2/10 per particle.
 struct ParticleWindows {
   int P = 0;
   std::vector<std::array<int, 3>> start;  // i0 in [0, M_d)
-  std::vector<double> w;                  // [particle][dir 0..2][omega, omega', omega''][P]
+  std::vector<double> w;                  // [particle][dir 0..2][deriv 0..3][P]
   std::vector<double> cF, cT;
-  const double* at(long p, int dir, int deriv) const { return w.data() + ((p * 3 + dir) * 3 + deriv) * P; }
+  const double* at(long p, int dir, int deriv) const { return w.data() + ((p * 3 + dir) * 4 + deriv) * P; }
 };
 
 // s_frac: fractional coordinates (any real values; wrapped here); a: radii.
 ParticleWindows make_windows(const GridGeometry& g, const std::vector<Vec3>& s_frac, const std::vector<double>& a);
-
-// Window weights of particle p at the P^3 points (row-major over j0, j1, j2), force kind and
-// torque kind: wF = W + cF lap W, wT = W + cT lap W. Buffers of size P^3.
-void window_weights(const GridGeometry& g, const ParticleWindows& win, long p, double* wF, double* wT);
 
 }  // namespace stokesian::ewald

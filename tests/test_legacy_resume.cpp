@@ -69,9 +69,11 @@ TEST_CASE("a 0.1.0 trajectory and checkpoint resume and finish where the old eng
     CHECK(after.frames == 7);
     CHECK(after.last_step == 12);
 
-    // Final frame against the old engine's uninterrupted run (17 significant digits stored). The
-    // arithmetic is the same, so on one machine the results agree to the last bit; across machines
-    // libm may round differently, hence the 1e-12 relative bound.
+    // Final frame against the old engine's uninterrupted run (17 significant digits stored). For
+    // legacy_sd the arithmetic is the same, so on one machine the results agree to the last bit;
+    // across machines libm may round differently, hence the 1e-12 relative bound. legacy_sheared
+    // uses the PME far field, rewritten since 0.1.0 (issue 12): its products now differ from the old
+    // ones within the scene's tolerance (1e-6), which bounds the difference of the final frame.
     std::istringstream expected(read_text(kData / (name + ".expected.txt")));
     std::string header;
     std::getline(expected, header);
@@ -89,7 +91,7 @@ TEST_CASE("a 0.1.0 trajectory and checkpoint resume and finish where the old eng
       }
     }
     CHECK(expected.good());
-    CHECK(err <= 1e-12 * scale);
+    CHECK(err <= (name == "legacy_sheared" ? 1e-6 : 1e-12) * scale);
     fs::remove_all(dir);
   }
 }

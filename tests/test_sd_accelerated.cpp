@@ -11,6 +11,8 @@
 // from the factorised matrix, and GMRES and BiCGStab agree.
 #include <doctest/doctest.h>
 
+#include <algorithm>
+
 #include "engine/accuracy.hpp"
 #include "engine/core/flow.hpp"
 #include "engine/methods.hpp"
@@ -148,7 +150,8 @@ std::unique_ptr<AcceleratedStokesianDynamics> accelerated(const Case& c, Moments
                                                           double factor_gap = AcceleratedStokesianDynamics::kFactorGap,
                                                           AcceleratedStokesianDynamics::Method method =
                                                               AcceleratedStokesianDynamics::Method::gmres) {
-  const AccuracyKnobs k = derive_knobs(tol, HydroModel::stokesian);
+  const auto [amin, amax] = std::minmax_element(c.a.begin(), c.a.end());
+  const AccuracyKnobs k = derive_knobs(tol, HydroModel::stokesian, *amax / *amin);
   const MobilitySpec spec{m, mu, k.far_field};
   auto op = far_field_methods().find(c.domain.periodic() ? "pme" : "direct")->make(spec);
   return std::make_unique<AcceleratedStokesianDynamics>(std::move(op), mu, lubrication::NearFieldParams{}, k.krylov,
