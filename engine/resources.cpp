@@ -9,6 +9,7 @@
 #include "lubrication/near_field.hpp"
 #include "ewald/lattice.hpp"
 #include "ewald/pme_parameters.hpp"
+#include "ewald/real_space.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -147,25 +148,29 @@ ResourceEstimate estimate_resources(const Scene& s, const ResolvedModel& model) 
         const double ff_tol = derive_knobs(s.hydro.tolerance, model.level, a_max / a_min).far_field;  // as the run asks
         const ewald::PmeParameters p =
             ewald::pme_parameters(ff_tol, lattice, int(std::min(N, 2e9)), a_min, a_max, model.moments);
-        const double G = double(p.grid[0]) * p.grid[1] * p.grid[2];
+        const double G = double(p.grid[0]) * p.grid[1] * ((p.grid[2] + p.support + 3) / 4 * 4);  // padded rows
         const double spectral = double(p.grid[0]) * p.grid[1] * (p.grid[2] / 2 + 1);
         Keys gk = model_keys;
         add_key(gk, s, "domain", "box", true);
         add_key(gk, s, "hydrodynamics", "tolerance");
-        e.components.push_back({"PME grid", 8.0 * d * G + 16.0 * d * spectral,
+        // ewald/pme.hpp: 3 force-density fields (padded rows) and their spectra, and the Fourier
+        // kernel's two factors per spectral point.
+        e.components.push_back({"PME grid", 8.0 * 3 * G + 16.0 * 3 * spectral + 16.0 * spectral,
                                 "grid " + std::to_string(p.grid[0]) + " x " + std::to_string(p.grid[1]) + " x " +
-                                    std::to_string(p.grid[2]) + " x " + std::to_string(d) +
-                                    " doubles and its spectrum, from far-field tolerance " + num(ff_tol),
+                                    std::to_string(p.grid[2]) +
+                                    " x 3 doubles, its spectrum and kernel, from far-field tolerance " + num(ff_tol),
                                 gk});
         const double P = p.support;
         const double pairs = N * neighbours(N, rho, p.cutoff_gap + 2 * a_max) / 2;
-        double cache = 2 * pairs * 120.0;
-        if (cache > 128.0 * 1024 * 1024) cache = 0.0;
-        e.components.push_back({"PME windows and pairs", 8.0 * (9 * P + 4) * N + 12.0 * N + 48.0 * pairs + cache,
+        // ewald/real_space.hpp: per ordered pair a neighbour index, unit vector and distance, and the
+        // scalar cache (16 / 48 / 112 bytes per ordered pair for F / FT / FTS) within its budget.
+        double cache = 2 * pairs * (d == 3 ? 16.0 : d == 6 ? 48.0 : 112.0);
+        if (cache > double(ewald::RealSpaceSum::kDefaultCacheBytes)) cache = 0.0;
+        e.components.push_back({"PME windows and pairs", 8.0 * (12 * P + 2) * N + 12.0 * N + 2 * 36.0 * pairs + cache,
                                 "support P = " + num(P) + ", " + num(pairs) + " real-space pairs within cut-off gap " +
                                     num(p.cutoff_gap) + " a",
                                 gk});
-        product = 2e-9 * 2 * N * P * P * P * d + 2.5e-9 * d * G * std::log2(std::max(G, 2.0)) + 30e-9 * 2 * pairs;
+        product = p.est_cost;  // the PME cost model (ewald/pme_parameters.hpp), one thread
       } catch (const std::invalid_argument&) {
         // The box is too small for the minimum-image real-space sum: the operator reports it.
       }

@@ -5,7 +5,6 @@
 #include "ewald/ewald_split.hpp"
 #include "ewald/interpolate.hpp"
 #include "ewald/kernel.hpp"
-#include "trees/neighbor_list.hpp"
 
 #include <fftw3.h>
 
@@ -55,7 +54,8 @@ void PmeFarField::set_configuration(const Configuration& c) {
       c.domain.shear_strain != 0.0 && long(c.x.size()) == n_) {
     domain_ = c.domain;
     set_lattice();
-    set_positions(c.x);
+    set_windows(c.x);
+    real_.update_positions(c.x, domain_);
     return;
   }
   build(c.x, c.a, c.domain);
@@ -92,16 +92,8 @@ void PmeFarField::build(const std::vector<Vec3>& x, const std::vector<double>& a
   grid_.row = (grid_.M[2] + grid_.P + 3) / 4 * 4;
   set_lattice();
   radius_ = a;
-  set_positions(x);
-  self_F_.resize(n_);
-  self_T_.resize(n_);
-  self_S_.resize(n_);
-  for (long i = 0; i < n_; ++i) {
-    const PairScalars sc = self_correction(a[i], p_.xi, mu);
-    self_F_[i] = sc.xa;
-    self_T_[i] = sc.xc;
-    self_S_[i] = sc.xm;
-  }
+  set_windows(x);
+  real_ = RealSpaceSum(x, a, domain, p_.cutoff_gap, p_.xi, mu, m, tolerance_);
 
   // FFTW arrays and plans.
   fft_ = std::make_unique<Fft>();
@@ -135,43 +127,17 @@ void PmeFarField::build(const std::vector<Vec3>& x, const std::vector<double>& a
     throw std::runtime_error("PmeFarField: FFTW planning failed");
 }
 
-void PmeFarField::set_positions(const std::vector<Vec3>& x) {
+void PmeFarField::set_windows(const std::vector<Vec3>& x) {
   std::vector<Vec3> s(n_);
   for (long p = 0; p < n_; ++p) s[p] = lattice_.Ainv * x[p];
   windows_ = make_windows(grid_, s, radius_);
   colouring_ = colour_slabs(grid_, windows_);
-
-  // Real-space pairs (minimum image, Lees-Edwards aware).
-  const auto pairs = trees::neighbor_pairs(x, radius_, domain_, p_.cutoff_gap);
-  pairs_.resize(pairs.size());
-  for (std::size_t q = 0; q < pairs.size(); ++q)
-    pairs_[q] = Pair{pairs[q].i, pairs[q].j, pairs[q].dist > 0.0 ? Vec3(pairs[q].r / pairs[q].dist) : Vec3::UnitZ(),
-                     pairs[q].dist};  // coincident centres: isotropic block, any axis
-  pair_start_.assign(n_ + 1, 0);
-  for (const Pair& pr : pairs_) {
-    ++pair_start_[pr.i + 1];
-    ++pair_start_[pr.j + 1];
-  }
-  for (long i = 0; i < n_; ++i) pair_start_[i + 1] += pair_start_[i];
-  pair_list_.resize(2 * pairs_.size());
-  std::vector<int> fill(pair_start_.begin(), pair_start_.end() - 1);
-  for (int q = 0; q < int(pairs_.size()); ++q) {
-    pair_list_[fill[pairs_[q].i]++] = 2 * q;
-    pair_list_[fill[pairs_[q].j]++] = 2 * q + 1;
-  }
-  cache_.clear();
-  if (pair_list_.size() * sizeof(PairScalars) <= kCacheBytes) {
-    std::vector<PairScalars> cache(pair_list_.size());
-#pragma omp parallel for schedule(dynamic, 64)
-    for (long i = 0; i < n_; ++i)
-      for (int t = pair_start_[i]; t < pair_start_[i + 1]; ++t) cache[t] = entry_scalars(i, t);
-    cache_ = std::move(cache);
-  }
 }
 
 void PmeFarField::update_positions(const std::vector<Vec3>& x) {
   if (long(x.size()) != n_) throw std::invalid_argument("PmeFarField::update_positions: particle count changed");
-  set_positions(x);
+  set_windows(x);
+  real_.update_positions(x);
 }
 
 PmeFarField::~PmeFarField() = default;
@@ -216,34 +182,7 @@ void PmeFarField::apply_wave(const VecX& in, VecX& out) const {
   interpolate(grid_, windows_, m_, f.real, out);
 }
 
-PairScalars PmeFarField::entry_scalars(long i, int t) const {
-  if (!cache_.empty()) return cache_[t];
-  const Pair& pr = pairs_[pair_list_[t] / 2];
-  const long j = pair_list_[t] % 2 == 0 ? pr.j : pr.i;
-  return real_scalars(radius_[i], radius_[j], pr.dist, p_.xi, mu_, m_);
-}
-
-void PmeFarField::apply_real(const VecX& in, VecX& out) const {
-  const int d = dof_per_particle(m_);
-  out.setZero(n_ * d);
-  // Each particle gathers its own row: no write conflicts, fixed summation order.
-#pragma omp parallel for schedule(dynamic, 64)
-  for (long i = 0; i < n_; ++i) {
-    double* yi = out.data() + i * d;
-    const double* xi = in.data() + i * d;
-    for (int c = 0; c < 3; ++c) yi[c] += self_F_[i] * xi[c];
-    if (d > 3)
-      for (int c = 3; c < 6; ++c) yi[c] += self_T_[i] * xi[c];
-    if (d > 6)
-      for (int c = 6; c < 11; ++c) yi[c] += self_S_[i] * xi[c];
-    for (int t = pair_start_[i]; t < pair_start_[i + 1]; ++t) {
-      const Pair& pr = pairs_[pair_list_[t] / 2];
-      const bool first = pair_list_[t] % 2 == 0;  // i is the pair's first particle
-      const long j = first ? pr.j : pr.i;
-      mobility::apply_pair(entry_scalars(i, t), first ? pr.e : Vec3(-pr.e), m_, in.data() + j * d, yi);
-    }
-  }
-}
+void PmeFarField::apply_real(const VecX& in, VecX& out) const { real_.apply(in, out); }
 
 void PmeFarField::apply(const VecX& in, VecX& out) const {
   if (in.size() != size()) throw std::invalid_argument("PmeFarField::apply: wrong input size");

@@ -9,8 +9,8 @@
 //              (kernel.hpp), inverse FFT, interpolate U and the velocity gradient (rotation, strain)
 //              with the same windows (interpolate.hpp);
 //   real part: sum over pairs with |r| < cutoff_gap + a_i + a_j of the real-space blocks
-//              (ewald_split.hpp), pairs from trees::neighbor_pairs (minimum image, Lees-Edwards);
-//   self part: M_self_free - wave(r = 0) per particle.
+//              (ewald_split.hpp) plus the self part M_self_free - wave(r = 0) per particle
+//              (real_space.hpp: cell-sorted pairs, tabulated scalars).
 // FFTs: the 3D transform is split into 2D transforms of the direction-0 planes and 1D transforms of
 // fixed blocks of direction-0 columns, each planned once (FFTW_ESTIMATE) and distributed over the
 // OpenMP threads; every sub-transform is computed by the same plan whatever the thread count.
@@ -29,6 +29,7 @@
 #include "ewald/lattice.hpp"
 #include "ewald/pme_parameters.hpp"
 #include "ewald/kernel.hpp"
+#include "ewald/real_space.hpp"
 #include "ewald/spread.hpp"
 
 #include <memory>
@@ -58,22 +59,15 @@ class PmeFarField final : public MobilityOperator {
   void update_positions(const std::vector<Vec3>& x);
 
   const PmeParameters& parameters() const { return p_; }
-  std::size_t real_pairs() const { return pairs_.size(); }
+  std::size_t real_pairs() const { return real_.pairs(); }
 
   // The three parts separately (out is overwritten), for tests and timing.
   void apply_wave(const VecX& in, VecX& out) const;
   void apply_real(const VecX& in, VecX& out) const;  // real space + self
 
  private:
-  struct Pair {
-    int i, j;
-    Vec3 e;       // (x_i - x_j) / |x_i - x_j|, minimum image
-    double dist;  // |x_i - x_j|
-  };
-  // Real-space scalars of entry t of particle i's neighbour list (cached or computed).
-  mobility::PairScalars entry_scalars(long i, int t) const;
   void build(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain);
-  void set_positions(const std::vector<Vec3>& x);
+  void set_windows(const std::vector<Vec3>& x);
   void set_lattice();  // lattice, window derivatives' metric and Fourier kernel for domain_
   struct Fft;
   long n_;
@@ -87,13 +81,8 @@ class PmeFarField final : public MobilityOperator {
   GridGeometry grid_;
   ParticleWindows windows_;
   SlabColouring colouring_;
-  std::vector<Pair> pairs_;
-  std::vector<int> pair_start_, pair_list_;  // CSR: entries of particle i, 2*pair + (role)
-  std::vector<double> self_F_, self_T_, self_S_;
+  RealSpaceSum real_;
   std::vector<double> radius_;
-  // Scalars per neighbour-list entry, kept when they fit in kCacheBytes; else computed per apply.
-  std::vector<mobility::PairScalars> cache_;
-  static constexpr std::size_t kCacheBytes = std::size_t(128) << 20;
   FourierKernel kernel_;
   std::unique_ptr<Fft> fft_;
 };

@@ -3,6 +3,7 @@
 
 #include "engine/kernels/mobility_pair.hpp"
 #include "ewald/ewald_split.hpp"
+#include "ewald/real_space.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -24,19 +25,23 @@ constexpr double kSafety = 0.4;
 // against the window shape at fixed grid (FT, N = 2000, phi = 0.4; docs/ewald.md s.5).
 constexpr double kEdge = 0.065;
 
-// Cost per unit of the model [s], measured by bench_ewald on the reference machine (1 thread).
+// Cost per unit of the model [s] on the reference machine (2-core AMD EPYC VM, one thread), measured
+// 2026-11-24: real-space pairs by bench/bench_pme_real.cpp (with and without the per-entry scalar
+// cache of real_space.hpp, which holds `cache_bytes` per ordered pair up to RealSpaceSum's budget);
+// window points (spread + interpolate, per particle and P^3) and transforms by timing apply_wave
+// at fixed parameters over grids 32^3-192^3 and P = 4-12 (N = 10^4, phi = 0.4).
 struct CostConstants {
-  double pair, point;
+  double pair_cached, pair, cache_bytes, point;
 };
 CostConstants cost_constants(Moments m) {
   switch (m) {
-    case Moments::F: return {15e-9, 1.2e-9};
-    case Moments::FT: return {40e-9, 3.0e-9};
-    default: return {80e-9, 3.5e-9};
+    case Moments::F: return {4e-9, 18e-9, 16, 2.5e-9};
+    case Moments::FT: return {10e-9, 44e-9, 48, 5.0e-9};
+    default: return {32e-9, 75e-9, 112, 5.5e-9};
   }
 }
-constexpr double kFft = 0.6e-9;   // per point and log2(points), one 3D field, forward or backward
-constexpr double kGrid = 6e-9;    // per grid point: Fourier kernel, zeroing, ghost points
+constexpr double kFft = 0.25e-9;  // per point and log2(points), one 3D field, forward or backward
+constexpr double kGrid = 2e-9;    // per grid point: Fourier kernel, zeroing, ghost points
 
 // Gauss-Legendre nodes and weights on [-1, 1] (Newton on the Legendre recurrence).
 struct Quadrature {
@@ -252,7 +257,9 @@ PmeParameters search(double tol, const Lattice& lattice, int n, double a_min, do
   Vec3 len(box.x(), box.y(), box.z());
   if (best.sheared) len.y() = std::sqrt(box.y() * box.y() + 0.25 * box.x() * box.x());
   const double lmin = box.minCoeff();  // shortest lattice vector for every reduced strain
-  const double cap = 0.5 * lmin - 2.0 * a_max;
+  // Minimum-image contract of the real-space sum: cutoff_gap + 2 a_max <= L_min / 2, with a margin so
+  // that adding 2 a_max back cannot round above L_min / 2.
+  const double cap = 0.5 * lmin * (1.0 - 1e-12) - 2.0 * a_max;
   if (!(cap > 0.0)) throw std::invalid_argument("pme_parameters: box smaller than four radii");
   const double rho = std::max(n, 1) / lattice.volume;
   const double S2 = opt.self_scale2 > 0.0 ? opt.self_scale2 : pme_self_scale2(a_max, m);
@@ -302,7 +309,8 @@ PmeParameters search(double tol, const Lattice& lattice, int n, double a_min, do
       std::array<int, 3> M;
       for (int d = 0; d < 3; ++d) M[d] = fft_size(int(std::ceil(sigma * k_in * len[d] / kPi)));
       const double G = double(M[0]) * M[1] * M[2];
-      const double fixed = cc.pair * pairs + 6.0 * kFft * G * std::log2(G) + kGrid * G;
+      const bool cached = 2.0 * pairs * cc.cache_bytes <= double(RealSpaceSum::kDefaultCacheBytes);
+      const double fixed = (cached ? cc.pair_cached : cc.pair) * pairs + 6.0 * kFft * G * std::log2(G) + kGrid * G;
       if (fixed >= best_cost) continue;
       double density_max = 0.0;  // grid points per unit length, largest direction
       for (int d = 0; d < 3; ++d) density_max = std::max(density_max, M[d] / len[d]);

@@ -212,7 +212,9 @@ void RealSpaceSum::build_table(double tolerance) {
   const int kmax = m_ == Moments::F ? 2 : 4;
   nf_ = 3 * kmax;
   stride_ = m_ == Moments::F ? 8 : 12;  // padded to whole 4-vectors
-  table_target_ = std::max(1e-4 * tolerance, 1e-15);
+  // Floor 2e-14: below it the tables cannot be resolved in double precision (the wave functions
+  // exceed the real part they are subtracted from by orders of magnitude at short range).
+  table_target_ = std::max(1e-4 * tolerance, 2e-14);
   const LD kmob = 1.0L / (8.0L * LD(kPi) * LD(mu_));
   constexpr int nodes = kCoef;
   LD tnode[nodes];

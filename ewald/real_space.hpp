@@ -22,7 +22,7 @@
 // Table accuracy. The intervals are halved until, on 9 sample points per interval (against the
 // closed forms in long double; Taylor series below xi r = 0.5), the error of every pair scalar is
 // bounded by
-//     eps_table = max(1e-4 tol, 1e-15) x (self mobility of a sphere of radius rho = min(a_max, r/2))
+//     eps_table = max(1e-4 tol, 2e-14) x (self mobility of a sphere of radius rho = min(a_max, r/2))
 // (the U <- F scalars against the translational self mobility, all others against the smallest
 // self mobility of the moments). The bound adds the errors of d_k W_j times c1_max, c2_max (a
 // separated pair at distance r has a_a + a_b <= r, so c1 <= min(r^2, 2 a_max^2)/6,
@@ -81,7 +81,7 @@ class RealSpaceSum {
   std::size_t overlapping_pairs() const { return overlap_j_.size() / 2; }
   int table_intervals() const { return intervals_; }
   double table_error() const { return table_error_; }     // measured, relative (see header)
-  double table_target() const { return table_target_; }   // max(1e-4 tol, 1e-15)
+  double table_target() const { return table_target_; }   // max(1e-4 tol, 2e-14)
   bool cached() const { return !cache_.empty(); }
   // The row kernels exist for the baseline x86-64 target and for AVX2 + FMA (chosen at run time
   // when the CPU has them); true forces the baseline ones in every object (for tests).

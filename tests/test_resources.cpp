@@ -79,7 +79,7 @@ TEST_CASE("dense SD at N = 64: the matrices are (d N)^2 doubles") {
   }
 }
 
-TEST_CASE("PME grid of a given box: the operator's own grid, 8 d G + 16 d M0 M1 (M2/2 + 1) bytes") {
+TEST_CASE("PME grid of a given box: the operator's own grid, 3 padded fields, their spectra and the kernel") {
   const std::string text = lattice64(
       "[domain]\nkind = \"periodic\"\nbox = [12.0, 12.0, 24.0]\n[hydrodynamics]\nmodel = \"far_field\"\n"
       "far_field = \"pme\"\ntolerance = 1e-4\n[time]\ndt = 0.01\nsteps = 1\n");
@@ -94,8 +94,11 @@ TEST_CASE("PME grid of a given box: the operator's own grid, 8 d G + 16 d M0 M1 
   ewald::PmeFarField op(MobilitySpec{Moments::F, 1.0, 1e-4});
   op.set_configuration(Configuration{s.positions, s.radii, s.domain});
   const auto M = op.parameters().grid;
-  const double G = double(M[0]) * M[1] * M[2];
-  CHECK(grid->bytes == 8.0 * 3 * G + 16.0 * 3 * M[0] * M[1] * (M[2] / 2 + 1));
+  const int P = op.parameters().support;
+  // ewald/pme.cpp: 3 fields of M0 M1 rows of (M2 + P) rounded up to a multiple of 4 doubles, 3 half
+  // spectra and the kernel's two factors per spectral point.
+  const double G = double(M[0]) * M[1] * ((M[2] + P + 3) / 4 * 4), spectral = double(M[0]) * M[1] * (M[2] / 2 + 1);
+  CHECK(grid->bytes == 8.0 * 3 * G + 16.0 * 3 * spectral + 16.0 * spectral);
   CHECK(has(grid->formula, std::to_string(M[0]) + " x " + std::to_string(M[1]) + " x " + std::to_string(M[2])));
 }
 
