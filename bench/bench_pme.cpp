@@ -8,8 +8,8 @@
 // [0, L)^3, L = (n 4 pi / 3 / phi)^(1/3), drawn from std::mt19937_64(seed = n); overlaps allowed
 // (the real-space pair count depends on the density only). Input x uniform in [-1, 1]^(dof N).
 // Achieved error = ||M_pme x - M_ref x|| / ||M_ref x||, M_ref x the PME product of the same
-// configuration at tolerance 1e-12 (1e-10 for N >= --ref10-from, default 10^6, where the 1e-12
-// object is too large; 1e-11 where the 1e-12 object cannot be built; ref_tol says which). tests/test_ewald.cpp checks the PME against the dense
+// configuration at tolerance 1e-12 (1e-10 for N >= --ref10-from, default 3 10^5, where the 1e-12
+// object is too large; none where even that exceeds --mem-gb; 1e-11 where the 1e-12 object cannot be built; ref_tol says which). tests/test_ewald.cpp checks the PME against the dense
 // Ewald sum over the tolerance sweep, so the reference is good to about its own tolerance.
 //
 // Rows (params are numbers; "kind" tells them apart):
@@ -29,7 +29,10 @@
 //     product. Previous numbers: bench/results/ewald_pme.json and pme_large.json (commit 07f964e).
 //   kind 4, the reference products (2 threads): N, phi, dof, ref_tol, strain, grid, support,
 //     pairs_per_particle, rss_mb; phases setup, product.
-//   bench_pme [--quick] [--out DIR] [--max-n N] [--ref10-from N]
+//   bench_pme [--quick] [--out DIR] [--max-n N] [--ref10-from N] [--only N] [--mem-gb G]
+// (--only: that N alone, e.g. 300000; --mem-gb, default 14: skip rows whose peak RSS scaled from the
+// previous N would exceed it, printed). N > 10^5 runs last, on 2 threads with one timed repeat;
+// error -1 where the reference was skipped.
 // --quick (~10 s on two free cores, ~40 s on a loaded machine): N = 1000 and 2000, tolerances 1e-3, 1e-4, 1e-6 (and 1e-2, 1e-8,
 // 1e-10 at N = 1000, phi = 0.1), Lees-Edwards, direct and the previous configuration at N = 1000.
 // Two-thread times need two free cores: with other runnable processes every OpenMP region of a product
@@ -117,17 +120,20 @@ double median_of(F&& f, int reps) {
   return t[t.size() / 2];
 }
 
-int reps_for(long n, bool quick) { return quick ? 3 : n <= 10000 ? 7 : n <= 100000 ? 3 : 1; }
+int reps_for(long n, bool quick) { return quick ? 3 : n <= 10000 ? 5 : n <= 100000 ? 3 : 1; }
 
 }  // namespace
 
 int main(int argc, char** argv) {
   // Own options first, the harness's (--quick, --out) after.
-  long max_n = 1000000, ref10_from = 1000000;
+  long max_n = 1000000, ref10_from = 300000, only = 0;
+  double mem_gb = 14.0;
   std::vector<char*> rest{argv[0]};
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--max-n") && i + 1 < argc) max_n = std::atol(argv[++i]);
     else if (!std::strcmp(argv[i], "--ref10-from") && i + 1 < argc) ref10_from = std::atol(argv[++i]);
+    else if (!std::strcmp(argv[i], "--only") && i + 1 < argc) only = std::atol(argv[++i]);
+    else if (!std::strcmp(argv[i], "--mem-gb") && i + 1 < argc) mem_gb = std::atof(argv[++i]);
     else rest.push_back(argv[i]);
   }
   const bench::Options opt = bench::parse_options(int(rest.size()), rest.data());
@@ -138,14 +144,42 @@ int main(int argc, char** argv) {
   if (!rss_reset) std::printf("note: /proc/self/clear_refs not writable: rss_mb is the process peak so far\n");
 
   std::vector<long> sizes = quick ? std::vector<long>{1000, 2000}
-                                  : std::vector<long>{1000, 3000, 10000, 30000, 100000, 300000, 1000000};
-  sizes.erase(std::remove_if(sizes.begin(), sizes.end(), [&](long n) { return n > max_n; }), sizes.end());
+                                  : std::vector<long>{1000, 3000, 10000, 30000, 100000, 1000000};
+  auto skip = [&](long n) { return n > max_n || (only > 0 && n != only); };
+  if (only > 0 && std::find(sizes.begin(), sizes.end(), only) == sizes.end()) sizes.push_back(only);
+  sizes.erase(std::remove_if(sizes.begin(), sizes.end(), skip), sizes.end());
   const std::vector<double> base_tols{1e-3, 1e-4, 1e-6};
   const std::vector<double> extra_tols{1e-2, 1e-8, 1e-10};  // speed-accuracy and error sweep
   const long accuracy_n1 = quick ? 1000 : 10000, accuracy_n2 = quick ? 0 : 100000;
 
+  // Memory guard: a row (or reference) is skipped when its peak RSS, scaled by N from the same row at
+  // the largest smaller N, would exceed --mem-gb (the machine is shared; an out-of-memory kill must not
+  // happen). Printed; the JSON holds only measured rows.
+  std::map<std::string, std::pair<long, double>> last_rss;
+  auto key = [](const char* what, Moments m, double phi, double tol, int threads) {
+    char b[96];
+    std::snprintf(b, sizeof b, "%s %s %.2f %.0e %d", what, to_string(m), phi, tol, threads);
+    return std::string(b);
+  };
+  auto fits = [&](const std::string& k, long n) {
+    const auto it = last_rss.find(k);
+    if (it == last_rss.end()) {  // nothing to scale from: small N only
+      if (n <= 100000) return true;
+      std::printf("skipped %s N=%ld: no smaller-N row to estimate its memory from\n", k.c_str(), n);
+      return false;
+    }
+    const double est = it->second.second * double(n) / double(it->second.first) / 1024.0;
+    if (est <= mem_gb) return true;
+    std::printf("skipped %s N=%ld: estimated peak RSS %.1f GB above --mem-gb %.1f\n", k.c_str(), n, est, mem_gb);
+    std::fflush(stdout);
+    return false;
+  };
+
+  // Returns the reference tolerance, or 0 if the reference is skipped (errors then recorded as -1).
   auto reference = [&](const Config& c, Moments m, const VecX& v, long n, double phi, VecX& yref) {
     double ref_tol = n >= ref10_from ? 1e-10 : 1e-12;
+    const std::string k = key("reference", m, phi, 1e-12, max_threads);
+    if (!fits(k, n)) return 0.0;
     omp_set_num_threads(max_threads);
     reset_peak_rss();
     std::unique_ptr<ewald::PmeFarField> pme;
@@ -164,6 +198,7 @@ int main(int argc, char** argv) {
     const double product = bench::time_once([&] { pme->apply(v, yref); });
     const auto& p = pme->parameters();
     const double rss = peak_rss_mb();
+    last_rss[k] = {n, rss};
     res.add({{"kind", 4}, {"N", double(n)}, {"phi", phi}, {"dof", double(dof_per_particle(m))}, {"ref_tol", ref_tol},
              {"strain", c.dom.shear_strain},
              {"grid", double(p.grid[0])}, {"support", double(p.support)},
@@ -175,8 +210,9 @@ int main(int argc, char** argv) {
     return ref_tol;
   };
 
-  // --- kinds 0 and 4: the sweep -------------------------------------------------------------------
-  for (long n : sizes) {
+  // --- kinds 0 and 4: the sweep (N > 10^5: 2 threads, one timed repeat, after the other kinds) ----
+  auto sweep = [&](long n) {
+    const bool large = n > 100000;
     for (double phi : {0.1, 0.4}) {
       const Config c = spheres(n, phi, std::uint64_t(n));
       for (Moments m : {Moments::F, Moments::FTS}) {
@@ -190,19 +226,22 @@ int main(int argc, char** argv) {
         for (double tol : tols) {
           const bool extra = std::find(extra_tols.begin(), extra_tols.end(), tol) != extra_tols.end();
           for (int threads = max_threads; threads >= 1; --threads) {
-            if (extra && threads != max_threads) continue;  // the extra tolerances on 2 threads only
+            if ((extra || large) && threads != max_threads) continue;  // extra tolerances, large N: 2 threads
+            const std::string k = key("pme", m, phi, tol, threads);
+            if (!fits(k, n)) continue;
             omp_set_num_threads(threads);
             reset_peak_rss();
             std::map<std::string, double> ph;
             std::unique_ptr<ewald::PmeFarField> pme;
             ph["setup"] = bench::time_once([&] { pme = std::make_unique<ewald::PmeFarField>(c.x, c.a, 1.0, m, c.dom, tol); });
             pme->apply(v, y);  // warm-up; the result for the error
-            const double err = rel_error(y, yref);
+            const double err = ref_tol > 0 ? rel_error(y, yref) : -1.0;
             const int reps = reps_for(n, quick);
             ph["wave"] = median_of([&] { pme->apply_wave(v, tmp); }, reps);
             ph["real"] = median_of([&] { pme->apply_real(v, tmp); }, reps);
             ph["product"] = median_of([&] { pme->apply(v, tmp); }, reps);
             const double rss = peak_rss_mb();
+            last_rss[k] = {n, rss};
             const auto& p = pme->parameters();
             const double ppp = double(pme->real_pairs()) / double(n);
             res.add({{"kind", 0}, {"N", double(n)}, {"phi", phi}, {"dof", double(dof)}, {"tol", tol},
@@ -221,11 +260,13 @@ int main(int argc, char** argv) {
       }
     }
     if (!quick) res.write(opt.out);  // partial results survive an interrupted run
-  }
+  };
+  for (long n : sizes)
+    if (n <= 100000) sweep(n);
 
   // --- kind 1: direct O(N^2) product (open domain), the time scale ------------------------------------
   for (long n : quick ? std::vector<long>{1000} : std::vector<long>{1000, 3000, 10000}) {
-    if (n > max_n) continue;
+    if (skip(n)) continue;
     const Config c = spheres(n, 0.1, std::uint64_t(n));
     for (Moments m : {Moments::F, Moments::FTS}) {
       const int dof = dof_per_particle(m);
@@ -241,7 +282,7 @@ int main(int argc, char** argv) {
 
   // --- kind 2: Lees-Edwards -------------------------------------------------------------------------
   for (long n : quick ? std::vector<long>{1000} : std::vector<long>{10000, 100000}) {
-    if (n > max_n) continue;
+    if (skip(n)) continue;
     const Moments m = Moments::FTS;
     const int dof = dof_per_particle(m);
     const double tol = 1e-4;
@@ -319,7 +360,7 @@ int main(int argc, char** argv) {
                                {64000, {Moments::F}, {1e-3, 1e-4}},
                                {100000, {Moments::F}, {1e-3, 1e-4}}};
   for (const Old& o : olds) {
-    if (o.n > max_n) continue;
+    if (skip(o.n)) continue;
     const long n = o.n;
     const double L = std::cbrt(double(n) * 4.19 * 1.25 / 0.1);
     const bench::Cloud cloud = bench::random_cloud(n, L, std::uint64_t(n));
@@ -353,6 +394,9 @@ int main(int argc, char** argv) {
     }
   }
 
+  if (!quick) res.write(opt.out);
+  for (long n : sizes)
+    if (n > 100000) sweep(n);
   std::printf("wrote %s\n", res.write(opt.out).c_str());
   return 0;
 }

@@ -65,6 +65,7 @@ def one(rs, phase="product"):
 
 
 pme = sel(rows, kind=0)
+acc = [r for r in pme if P(r, "error", -1.0) > 0]  # rows with a reference (error -1: none fitted in memory)
 threads = max(P(r, "threads") for r in pme)
 tols = sorted({P(r, "tol") for r in pme}, reverse=True)
 base_tols = [t for t in (1e-3, 1e-4, 1e-6) if t in tols]
@@ -121,7 +122,7 @@ acc_n = sorted({P(r, "N") for r in pme if P(r, "tol") in (1e-2, 1e-10)})
 markers = {3: "o", 11: "s"}
 for i, n0 in enumerate(acc_n):
     for dof in (3, 11):
-        rs = sorted(sel(pme, dof=dof, N=n0, phi=0.1, threads=threads), key=lambda r: -P(r, "tol"))
+        rs = sorted(sel(acc, dof=dof, N=n0, phi=0.1, threads=threads), key=lambda r: -P(r, "tol"))
         if not rs:
             continue
         e = [P(r, "error") for r in rs]
@@ -150,7 +151,7 @@ ax = axes[1, 1]
 ax.axhspan(0.1, 1.0, color="green", alpha=0.1, label="goal [0.1, 1]")
 for dof, mk in markers.items():
     for phi, fill in ((0.1, "full"), (0.4, "none")):
-        rs = sel(pme, dof=dof, phi=phi, threads=threads)
+        rs = sel(acc, dof=dof, phi=phi, threads=threads)
         if rs:
             ax.loglog([P(r, "tol") for r in rs], [P(r, "error") / P(r, "tol") for r in rs], mk, fillstyle=fill,
                       ms=5, alpha=0.7, label=f"{NAME[dof]}, $\\phi$={phi}")
@@ -229,11 +230,17 @@ for m in ("F", "FTS"):
             print(f"    {m:3s} phi {phi}: " + ", ".join(f"N={n0:.0e} {c:.2f}" for n0, c in v))
 print("  achieved / requested (goal within [0.1, 1]):")
 for tol in tols:
-    v = [P(r, "error") / tol for r in sel(pme, tol=tol)]
+    v = [P(r, "error") / tol for r in sel(acc, tol=tol)]
+    if not v:
+        continue
     print(f"    tol {tol:.0e}: {min(v):.3f} .. {max(v):.3f} over {len(v)} rows")
-v = [P(r, "error") / P(r, "tol") for r in pme]
+v = [P(r, "error") / P(r, "tol") for r in acc]
 print(f"    all rows: {min(v):.3f} .. {max(v):.3f}; outside [0.1, 1]: {sum(1 for x in v if not 0.1 <= x <= 1)}"
-      f" of {len(v)}")
+      f" of {len(v)}; rows without a reference: {len(pme) - len(acc)}")
+for r in acc:
+    if not 0.1 <= P(r, "error") / P(r, "tol") <= 1:
+        print(f"      outside: {NAME[P(r, 'dof')]} N={P(r, 'N'):.0f} phi {P(r, 'phi')} tol {P(r, 'tol'):.0e} "
+              f"{P(r, 'threads'):.0f} thr: {P(r, 'error') / P(r, 'tol'):.3f}")
 print(f"  {threads} threads / 1 thread, product (goal >= 1.8):")
 for dof in (3, 11):
     for phi in (0.1, 0.4):
