@@ -278,3 +278,27 @@ for r in sel(rows, kind=4):
         print(f"    {NAME[P(r, 'dof')]:3s} N={P(r, 'N'):.0e} phi {P(r, 'phi')}: {P(t4[0], 'rss_mb') if t4 else float('nan'):.0f}"
               f" / {P(r, 'rss_mb'):.0f} (reference tol {P(r, 'ref_tol'):.0e}: setup {one([r], 'setup'):.1f} s,"
               f" product {one([r]):.1f} s)")
+
+# --- markdown tables for docs/benchmarks.md --------------------------------------------------------
+print("\nTime per product [s], %d threads (1 thread in brackets where measured):\n" % threads)
+cols = [(dof, phi, tol) for dof in (3, 11) for phi in (0.1, 0.4) for tol in base_tols]
+print("| N | " + " | ".join(f"{NAME[d]} {p} {t:.0e}" for d, p, t in cols) + " |")
+print("|---" * (len(cols) + 1) + "|")
+for n0 in sorted({P(r, "N") for r in pme}):
+    cells = []
+    for d, p, t in cols:
+        a, b = sel(pme, dof=d, phi=p, tol=t, N=n0, threads=threads), sel(pme, dof=d, phi=p, tol=t, N=n0, threads=1)
+        cells.append((f"{one(a):.3g}" if a else "–") + (f" ({one(b):.3g})" if b else ""))
+    print(f"| {n0:.0f} | " + " | ".join(cells) + " |")
+print("\nTolerance 1e-4, %d threads: parameters, phases [s], error, memory:\n" % threads)
+print("| moments | phi | N | grid | P | pairs/N | set-up | wave | real | product | model | error/tol | peak RSS MB |")
+print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+for d in (3, 11):
+    for p in (0.1, 0.4):
+        for r in sorted(sel(pme, dof=d, phi=p, tol=1e-4, threads=threads), key=lambda r: P(r, "N")):
+            ph = r["phases"]
+            e = P(r, "error")
+            print(f"| {NAME[d]} | {p} | {P(r, 'N'):.0f} | {P(r, 'grid'):.0f} | {P(r, 'support'):.0f} | "
+                  f"{P(r, 'pairs_per_particle'):.0f} | {ph['setup']:.3g} | {ph['wave']:.3g} | {ph['real']:.3g} | "
+                  f"{ph['product']:.3g} | {P(r, 'est_cost'):.3g} | " + (f"{e / 1e-4:.2f}" if e > 0 else "–")
+                  + f" | {P(r, 'rss_mb'):.0f} |")
