@@ -6,7 +6,8 @@
 
 namespace stokesian::ewald {
 
-void interpolate(const GridGeometry& g, const ParticleWindows& win, Moments m, const double* grid, VecX& out) {
+void interpolate(const GridGeometry& g, const ParticleWindows& win, const SlabColouring& colouring, Moments m,
+                 const double* grid, VecX& out) {
   const int d = dof_per_particle(m);
   const long n = long(win.start.size());
   const int P = g.P;
@@ -14,50 +15,51 @@ void interpolate(const GridGeometry& g, const ParticleWindows& win, Moments m, c
   const bool grad = m != Moments::F;
   const auto& basis = sym_traceless_basis();
   out.resize(n * d);
-#pragma omp parallel for schedule(static)
-  for (long p = 0; p < n; ++p) {
-    double wF[64], gd[3][64];
-    double U[3] = {0, 0, 0}, Dd[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};  // Dd[delta dir][velocity comp]
-    const auto& s = win.start[p];
-    for (int j0 = 0; j0 < P; ++j0) {
-      const int i0 = (s[0] + j0) % g.M[0];
-      for (int j1 = 0; j1 < P; ++j1) {
-        const int i1 = (s[1] + j1) % g.M[1];
-        row_weights(g, win, p, j0, j1, grad, wF, gd);
-        const long base = grid_offset(g, i0, i1, s[2]);
-        for (int c = 0; c < 3; ++c) {
-          const double* r = grid + c * stored + base;
-          double u = 0.0;
-          for (int l = 0; l < P; ++l) u += wF[l] * r[l];
-          U[c] += u;
-          if (grad) {
-            double e0 = 0.0, e1 = 0.0, e2 = 0.0;
-            for (int l = 0; l < P; ++l) {
-              e0 += gd[0][l] * r[l];
-              e1 += gd[1][l] * r[l];
-              e2 += gd[2][l] * r[l];
+#pragma omp parallel for schedule(dynamic, 1)
+  for (int slab = 0; slab < colouring.slabs; ++slab)
+    for (long p : colouring.members[std::size_t(slab)]) {
+      double wF[64], gd[3][64];
+      double U[3] = {0, 0, 0}, Dd[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};  // Dd[delta dir][velocity comp]
+      const auto& s = win.start[p];
+      for (int j0 = 0; j0 < P; ++j0) {
+        const int i0 = (s[0] + j0) % g.M[0];
+        for (int j1 = 0; j1 < P; ++j1) {
+          const int i1 = (s[1] + j1) % g.M[1];
+          row_weights(g, win, p, j0, j1, grad, wF, gd);
+          const long base = grid_offset(g, i0, i1, s[2]);
+          for (int c = 0; c < 3; ++c) {
+            const double* r = grid + c * stored + base;
+            double u = 0.0;
+            for (int l = 0; l < P; ++l) u += wF[l] * r[l];
+            U[c] += u;
+            if (grad) {
+              double e0 = 0.0, e1 = 0.0, e2 = 0.0;
+              for (int l = 0; l < P; ++l) {
+                e0 += gd[0][l] * r[l];
+                e1 += gd[1][l] * r[l];
+                e2 += gd[2][l] * r[l];
+              }
+              Dd[0][c] += e0;
+              Dd[1][c] += e1;
+              Dd[2][c] += e2;
             }
-            Dd[0][c] += e0;
-            Dd[1][c] += e1;
-            Dd[2][c] += e2;
           }
         }
       }
+      double* y = out.data() + p * d;
+      for (int c = 0; c < 3; ++c) y[c] = U[c];
+      if (!grad) continue;
+      // Physical gradient: D = J^T Dd.
+      Mat3 D = Mat3::Zero();
+      for (int b = 0; b < 3; ++b)
+        for (int c = 0; c < 3; ++c)
+          for (int e = 0; e < 3; ++e) D(b, c) += g.J(e, b) * Dd[e][c];
+      y[3] = -0.5 * (D(1, 2) - D(2, 1));
+      y[4] = -0.5 * (D(2, 0) - D(0, 2));
+      y[5] = -0.5 * (D(0, 1) - D(1, 0));
+      if (d > 6)
+        for (int b = 0; b < 5; ++b) y[6 + b] = -(basis[std::size_t(b)].cwiseProduct(D)).sum();
     }
-    double* y = out.data() + p * d;
-    for (int c = 0; c < 3; ++c) y[c] = U[c];
-    if (!grad) continue;
-    // Physical gradient: D = J^T Dd.
-    Mat3 D = Mat3::Zero();
-    for (int b = 0; b < 3; ++b)
-      for (int c = 0; c < 3; ++c)
-        for (int e = 0; e < 3; ++e) D(b, c) += g.J(e, b) * Dd[e][c];
-    y[3] = -0.5 * (D(1, 2) - D(2, 1));
-    y[4] = -0.5 * (D(2, 0) - D(0, 2));
-    y[5] = -0.5 * (D(0, 1) - D(1, 0));
-    if (d > 6)
-      for (int b = 0; b < 5; ++b) y[6 + b] = -(basis[std::size_t(b)].cwiseProduct(D)).sum();
-  }
 }
 
 }  // namespace stokesian::ewald

@@ -9,7 +9,11 @@
 //     Omega_a = -(1/2) eps_abc D_bc,   E_m = -B_m : D
 // (B_m the basis of engine/core/sym_traceless.hpp): rotation and strain come from the velocity alone.
 // Each particle reads the grid only (its ghost points must hold the periodic copies): parallel
-// over particles, no conflicts, deterministic.
+// over slabs, no conflicts, deterministic. Particles are visited in the spreading order of
+// spread.hpp (slab by slab, sorted by window start within a slab), so consecutive windows overlap
+// and the grid is read from cache; in index order the reads miss (measured: 87 % of the
+// interpolation time at N = 3e4 stalled on grid loads).
+#include "ewald/spread.hpp"
 #include "ewald/window.hpp"
 
 #include <vector>
@@ -17,6 +21,7 @@
 namespace stokesian::ewald {
 
 // out (size N d) is overwritten; grid as in spread.hpp (3 fields, ghost points filled).
-void interpolate(const GridGeometry& g, const ParticleWindows& win, Moments m, const double* grid, VecX& out);
+void interpolate(const GridGeometry& g, const ParticleWindows& win, const SlabColouring& colouring, Moments m,
+                 const double* grid, VecX& out);
 
 }  // namespace stokesian::ewald

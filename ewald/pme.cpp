@@ -179,7 +179,7 @@ void PmeFarField::apply_wave(const VecX& in, VecX& out) const {
     double* v = f.real + r * grid_.row;
     for (int l = 0; l < ghosts; ++l) v[M2 + l] = v[l];
   }
-  interpolate(grid_, windows_, m_, f.real, out);
+  interpolate(grid_, windows_, colouring_, m_, f.real, out);
 }
 
 void PmeFarField::apply_real(const VecX& in, VecX& out) const { real_.apply(in, out); }

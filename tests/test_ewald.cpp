@@ -551,7 +551,7 @@ TEST_CASE("PME spreading and interpolation: separable fast path equals a plain p
     CAPTURE(to_string(m));
     CHECK(err < 1e-13 * norm);
     VecX y;
-    ewald::interpolate(g, win, m, padded.data(), y);
+    ewald::interpolate(g, win, colouring, m, padded.data(), y);
     CHECK(rel_error(y, yref) < 1e-13);
   }
 }
