@@ -31,6 +31,9 @@
 //   kind 4, the reference products (2 threads): N, phi, dof, ref_tol, strain, grid, support,
 //     pairs_per_particle, rss_mb; phases setup, product.
 //   bench_pme [--quick] [--out DIR] [--max-n N] [--ref10-from N] [--only N] [--mem-gb G]
+//             [--name NAME] [--moments F|FTS|F,FTS] [--tols a,b,..] [--no-reference] [--unguarded]
+// (--name: results file NAME.json; --moments, --tols: restrict the sweep; --no-reference: no error;
+// --unguarded: rows at N > 10^5 without a smaller-N row to scale from are run, e.g. with --only)
 // (--only: that N alone, e.g. 300000; --mem-gb, default 14: skip rows whose peak RSS scaled from the
 // previous N would exceed it, printed). N > 10^5 runs last, on 2 threads with one timed repeat;
 // error -1 where the reference was skipped.
@@ -137,17 +140,26 @@ int main(int argc, char** argv) {
   // Own options first, the harness's (--quick, --out) after.
   long max_n = 1000000, ref10_from = 300000, only = 0;
   double mem_gb = 14.0;
+  std::string name = "pme", moments = "F,FTS";
+  bool no_reference = false, unguarded = false;
+  std::vector<double> only_tols;
   std::vector<char*> rest{argv[0]};
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--max-n") && i + 1 < argc) max_n = std::atol(argv[++i]);
     else if (!std::strcmp(argv[i], "--ref10-from") && i + 1 < argc) ref10_from = std::atol(argv[++i]);
     else if (!std::strcmp(argv[i], "--only") && i + 1 < argc) only = std::atol(argv[++i]);
     else if (!std::strcmp(argv[i], "--mem-gb") && i + 1 < argc) mem_gb = std::atof(argv[++i]);
+    else if (!std::strcmp(argv[i], "--name") && i + 1 < argc) name = argv[++i];
+    else if (!std::strcmp(argv[i], "--moments") && i + 1 < argc) moments = argv[++i];
+    else if (!std::strcmp(argv[i], "--tols") && i + 1 < argc) {
+      for (char* t = std::strtok(argv[++i], ","); t; t = std::strtok(nullptr, ",")) only_tols.push_back(std::atof(t));
+    } else if (!std::strcmp(argv[i], "--no-reference")) no_reference = true;
+    else if (!std::strcmp(argv[i], "--unguarded")) unguarded = true;
     else rest.push_back(argv[i]);
   }
   const bench::Options opt = bench::parse_options(int(rest.size()), rest.data());
   const bool quick = opt.quick;
-  bench::Results res(quick ? "pme_quick" : "pme");
+  bench::Results res(quick ? "pme_quick" : name);
   const int max_threads = std::min(2, omp_get_max_threads());
   const bool rss_reset = reset_peak_rss();
   if (!rss_reset) std::printf("note: /proc/self/clear_refs not writable: rss_mb is the process peak so far\n");
@@ -173,7 +185,7 @@ int main(int argc, char** argv) {
   auto fits = [&](const std::string& k, long n) {
     const auto it = last_rss.find(k);
     if (it == last_rss.end()) {  // nothing to scale from: small N only
-      if (n <= 100000) return true;
+      if (n <= 100000 || unguarded) return true;
       std::printf("skipped %s N=%ld: no smaller-N row to estimate its memory from\n", k.c_str(), n);
       return false;
     }
@@ -225,11 +237,14 @@ int main(int argc, char** argv) {
     for (double phi : {0.1, 0.4}) {
       const Config c = spheres(n, phi, std::uint64_t(n));
       for (Moments m : {Moments::F, Moments::FTS}) {
+        if ((m == Moments::F && moments.find('F') == std::string::npos) ||
+            (m == Moments::FTS && moments.find("FTS") == std::string::npos) || (m == Moments::F && moments == "FTS"))
+          continue;
         const int dof = dof_per_particle(m);
         const VecX v = random_input(n * dof, std::uint64_t(n) + 17);
         VecX yref, y, tmp;
-        const double ref_tol = reference(c, m, v, n, phi, yref);
-        std::vector<double> tols = base_tols;
+        const double ref_tol = no_reference ? 0.0 : reference(c, m, v, n, phi, yref);
+        std::vector<double> tols = only_tols.empty() ? base_tols : only_tols;
         const bool accuracy = (n == accuracy_n1 && (!quick || phi == 0.1)) || (n == accuracy_n2 && phi == 0.1);
         if (accuracy) tols.insert(tols.end(), extra_tols.begin(), extra_tols.end());
         for (double tol : tols) {
