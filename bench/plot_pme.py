@@ -195,7 +195,7 @@ for n0 in sorted({P(r, "N") for r in le}):
             r3, r31 = sel(le, N=n0, threads=thr, strain=0.3), sel(le, N=n0, threads=thr, strain=0.31)
             le_text.append(f"LE N={n0:.0e} {thr} thr: sheared/unsheared {one(r3) / one(base):.2f}, "
                            f"after strain change {one(r31) / one(base):.2f}")
-ax.text(0.02, 0.02, "\n".join(le_text), transform=ax.transAxes, fontsize=7, va="bottom")
+ax.text(0.02, 0.45, "\n".join(le_text), transform=ax.transAxes, fontsize=7, va="top")
 ax.set_xlabel("N")
 ax.set_ylabel("speed-up")
 ax.set_title("(f) previous/new (same configurations); threads")
@@ -272,8 +272,10 @@ for m in ("F", "FTS"):
         if v:
             print(f"    {m:3s} {thr} thr: " + ", ".join(f"N={n0:.0f} {tol:.0e}: {s:.1f}" for n0, tol, s in v))
 print("  memory: peak RSS [MB] at tol 1e-4 / reference:")
+seen = set()
 for r in sel(rows, kind=4):
-    if P(r, "strain", 0.0) == 0.0 and P(r, "N") >= 1e5:
+    if P(r, "strain", 0.0) == 0.0 and P(r, "N") >= 1e5 and (P(r, "N"), P(r, "phi"), P(r, "dof")) not in seen:
+        seen.add((P(r, "N"), P(r, "phi"), P(r, "dof")))
         t4 = sel(pme, N=P(r, "N"), phi=P(r, "phi"), dof=P(r, "dof"), tol=1e-4, threads=threads)
         print(f"    {NAME[P(r, 'dof')]:3s} N={P(r, 'N'):.0e} phi {P(r, 'phi')}: {P(t4[0], 'rss_mb') if t4 else float('nan'):.0f}"
               f" / {P(r, 'rss_mb'):.0f} (reference tol {P(r, 'ref_tol'):.0e}: setup {one([r], 'setup'):.1f} s,"
