@@ -6,6 +6,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <array>
 #include <atomic>
 #include <cmath>
@@ -204,6 +205,14 @@ RealSpaceSum::RealSpaceSum(const std::vector<Vec3>& x, const std::vector<double>
   set_positions(x);
 }
 
+namespace {
+std::string sci(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", v);
+  return buf;
+}
+}  // namespace
+
 void RealSpaceSum::build_table(double tolerance) {
   const auto [pmin, pmax] = std::minmax_element(radius_.begin(), radius_.end());
   const double amin = *pmin, amax = *pmax;
@@ -285,8 +294,8 @@ void RealSpaceSum::build_table(double tolerance) {
       return;
     }
     if (nint >= (1 << 14))
-      throw std::runtime_error("RealSpaceSum: real-space table error " + std::to_string(worst) +
-                               " above the target " + std::to_string(table_target_) + " with " +
+      throw std::runtime_error("RealSpaceSum: real-space table error " + sci(worst) + " above the target " +
+                               sci(table_target_) + " with " +
                                std::to_string(nint) + " intervals");
   }
 }
