@@ -57,6 +57,7 @@
 //           KB) at the minimal P and P + 1: window, sigma, tol, P, t_rule, err_max, d2_max
 //   bench_windows [--quick] [--out DIR]     (--quick: K = 48 particles, n_max = 16, fewer cases)
 #include "bench/harness.hpp"
+#include "engine/core/quadrature.hpp"
 
 #include <fftw3.h>
 
@@ -86,34 +87,9 @@ struct Window {
   double beta;
 };
 
-// Gauss-Legendre nodes and weights on [-1, 1] (Newton on the three-term recurrence).
-struct Quad {
-  std::vector<double> x, w;
-};
-Quad gauss_legendre(int n) {
-  Quad q;
-  q.x.resize(n);
-  q.w.resize(n);
-  for (int i = 0; i < n; ++i) {
-    double x = std::cos(kPi * (i + 0.75) / (n + 0.5));
-    double dp = 0;
-    for (int it = 0; it < 100; ++it) {
-      double p0 = 1, p1 = x;
-      for (int k = 2; k <= n; ++k) {
-        const double p2 = ((2 * k - 1) * x * p1 - (k - 1) * p0) / k;
-        p0 = p1;
-        p1 = p2;
-      }
-      dp = n * (x * p1 - p0) / (x * x - 1);
-      const double dx = p1 / dp;
-      x -= dx;
-      if (std::abs(dx) < 1e-16) break;
-    }
-    q.x[i] = x;
-    q.w[i] = 2 / ((1 - x * x) * dp * dp);
-  }
-  return q;
-}
+// Gauss-Legendre nodes and weights on [-1, 1] (engine/core/quadrature.hpp).
+using Quad = stokesian::GaussLegendre;
+using stokesian::gauss_legendre;
 
 // Window value on z in [-1, 1] (shape only, no truncation logic).
 double shape(const Window& w, double z) {

@@ -18,34 +18,26 @@ void interpolate(const GridGeometry& g, const ParticleWindows& win, const SlabCo
 #pragma omp parallel for schedule(dynamic, 1)
   for (int slab = 0; slab < colouring.slabs; ++slab)
     for (long p : colouring.members[std::size_t(slab)]) {
-      double wF[64], gd[3][64];
       double U[3] = {0, 0, 0}, Dd[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};  // Dd[delta dir][velocity comp]
-      const auto& s = win.start[p];
-      for (int j0 = 0; j0 < P; ++j0) {
-        const int i0 = (s[0] + j0) % g.M[0];
-        for (int j1 = 0; j1 < P; ++j1) {
-          const int i1 = (s[1] + j1) % g.M[1];
-          row_weights(g, win, p, j0, j1, grad, wF, gd);
-          const long base = grid_offset(g, i0, i1, s[2]);
-          for (int c = 0; c < 3; ++c) {
-            const double* r = grid + c * stored + base;
-            double u = 0.0;
-            for (int l = 0; l < P; ++l) u += wF[l] * r[l];
-            U[c] += u;
-            if (grad) {
-              double e0 = 0.0, e1 = 0.0, e2 = 0.0;
-              for (int l = 0; l < P; ++l) {
-                e0 += gd[0][l] * r[l];
-                e1 += gd[1][l] * r[l];
-                e2 += gd[2][l] * r[l];
-              }
-              Dd[0][c] += e0;
-              Dd[1][c] += e1;
-              Dd[2][c] += e2;
+      for_each_window_row(g, win, p, grad, [&](long base, const double* wF, const double(*gd)[64]) {
+        for (int c = 0; c < 3; ++c) {
+          const double* r = grid + c * stored + base;
+          double u = 0.0;
+          for (int l = 0; l < P; ++l) u += wF[l] * r[l];
+          U[c] += u;
+          if (grad) {
+            double e0 = 0.0, e1 = 0.0, e2 = 0.0;
+            for (int l = 0; l < P; ++l) {
+              e0 += gd[0][l] * r[l];
+              e1 += gd[1][l] * r[l];
+              e2 += gd[2][l] * r[l];
             }
+            Dd[0][c] += e0;
+            Dd[1][c] += e1;
+            Dd[2][c] += e2;
           }
         }
-      }
+      });
       double* y = out.data() + p * d;
       for (int c = 0; c < 3; ++c) y[c] = U[c];
       if (!grad) continue;

@@ -1,6 +1,7 @@
 // Tolerance -> PME parameters; the error and cost models are stated in pme_parameters.hpp.
 #include "ewald/pme_parameters.hpp"
 
+#include "engine/core/quadrature.hpp"
 #include "engine/kernels/mobility_pair.hpp"
 #include "ewald/ewald_split.hpp"
 #include "ewald/real_space.hpp"
@@ -45,43 +46,16 @@ CostConstants cost_constants(Moments m) {
 constexpr double kFft = 0.25e-9;  // per point and log2(points), one 3D field, forward or backward
 constexpr double kGrid = 2e-9;    // per grid point: Fourier kernel, zeroing, ghost points
 
-// Gauss-Legendre nodes and weights on [-1, 1] (Newton on the Legendre recurrence).
-struct Quadrature {
-  std::vector<double> x, w;
-};
-Quadrature make_gauss_legendre(int n) {
-  {
-    Quadrature q;
-    q.x.resize(n);
-    q.w.resize(n);
-    for (int i = 0; i < n; ++i) {
-      double z = std::cos(kPi * (i + 0.75) / (n + 0.5)), dp = 0.0;
-      for (int it = 0; it < 100; ++it) {
-        double p0 = 1.0, p1 = z;
-        for (int k = 2; k <= n; ++k) {
-          const double p2 = ((2.0 * k - 1.0) * z * p1 - (k - 1.0) * p0) / k;
-          p0 = p1;
-          p1 = p2;
-        }
-        dp = n * (z * p1 - p0) / (z * z - 1.0);
-        const double dz = p1 / dp;
-        z -= dz;
-        if (std::abs(dz) < 1e-15) break;
-      }
-      q.x[i] = z;
-      q.w[i] = 2.0 / ((1.0 - z * z) * dp * dp);
-    }
-    return q;
-  }
-}
-const Quadrature& gauss_legendre(int n) {
-  static const Quadrature q16 = make_gauss_legendre(16), q32 = make_gauss_legendre(32);
+// Gauss-Legendre rules of the model's integrals (engine/core/quadrature.hpp), made once.
+using Quadrature = GaussLegendre;
+const Quadrature& rule(int n) {
+  static const Quadrature q16 = stokesian::gauss_legendre(16), q32 = stokesian::gauss_legendre(32);
   return n == 16 ? q16 : q32;
 }
 // int_lo^hi f by 32-point Gauss-Legendre on `panels` equal panels.
 template <class F>
 double integrate(F&& f, double lo, double hi, int panels) {
-  const Quadrature& q = gauss_legendre(32);
+  const Quadrature& q = rule(32);
   const double h = (hi - lo) / panels;
   double sum = 0.0;
   for (int p = 0; p < panels; ++p) {
@@ -143,7 +117,7 @@ double pme_wave_error2(double k_in, double xi, double a, double rho, Moments m) 
   // Pairs: Parseval over random positions. Self: the truncated modes' own contribution, coherent
   // over k: the direction average of R G R^+ is diag(2/3 P_F^2 I3, 1/6 k^2 P_T^2 I3, 1/5 k^2 P_T^2 I5) g.
   double pair = 0.0, sF = 0.0, sT = 0.0, sS = 0.0;
-  const Quadrature& q = gauss_legendre(32);
+  const Quadrature& q = rule(32);
   const double lo = k_in, hi = k_in + 14.0 * xi, h = (hi - lo) / 4.0;
   for (int p = 0; p < 4; ++p)
     for (std::size_t i = 0; i < q.x.size(); ++i) {
@@ -168,7 +142,7 @@ double pme_alias_error2(const std::array<int, 3>& M, const Vec3& lengths, const 
   // Pairs: Parseval over random positions (header). Self: the alias of a particle on itself is
   // coherent over k, with a phase set by its sub-grid position; per alias (d, m) it is bounded by
   // the integral of ||R(k) G(k) R(k_m)^+||_F |phihat ratio|, and the aliases add in quadrature.
-  const Quadrature& q = gauss_legendre(16);
+  const Quadrature& q = rule(16);
   double pair = 0.0, self = 0.0;
   for (int d = 0; d < 3; ++d) {
     const double K = 2.0 * kPi * M[d] / lengths[d];

@@ -76,26 +76,18 @@ void spread_particle(const GridGeometry& g, const ParticleWindows& win, long p, 
   const long stored = g.stored();
   const bool grad = m != Moments::F;
   const Mat3 Q = source_matrix(g, m, q);
-  double wF[64], gd[3][64];
-  const auto& s = win.start[p];
-  for (int j0 = 0; j0 < P; ++j0) {
-    const int i0 = (s[0] + j0) % g.M[0];
-    for (int j1 = 0; j1 < P; ++j1) {
-      const int i1 = (s[1] + j1) % g.M[1];
-      row_weights(g, win, p, j0, j1, grad, wF, gd);
-      const long base = grid_offset(g, i0, i1, s[2]);
-      for (int c = 0; c < 3; ++c) {
-        double* r = grid + c * stored + base;
-        const double f = q[c];
-        if (!grad) {
-          for (int l = 0; l < P; ++l) r[l] += f * wF[l];
-        } else {
-          const double q0 = Q(c, 0), q1 = Q(c, 1), q2 = Q(c, 2);
-          for (int l = 0; l < P; ++l) r[l] += f * wF[l] + q0 * gd[0][l] + q1 * gd[1][l] + q2 * gd[2][l];
-        }
+  for_each_window_row(g, win, p, grad, [&](long base, const double* wF, const double(*gd)[64]) {
+    for (int c = 0; c < 3; ++c) {
+      double* r = grid + c * stored + base;
+      const double f = q[c];
+      if (!grad) {
+        for (int l = 0; l < P; ++l) r[l] += f * wF[l];
+      } else {
+        const double q0 = Q(c, 0), q1 = Q(c, 1), q2 = Q(c, 2);
+        for (int l = 0; l < P; ++l) r[l] += f * wF[l] + q0 * gd[0][l] + q1 * gd[1][l] + q2 * gd[2][l];
       }
     }
-  }
+  });
 }
 }  // namespace
 

@@ -48,4 +48,21 @@ inline long grid_offset(const GridGeometry& g, int i0, int i1, int i2) {
   return (long(i0) * g.M[1] + i1) * g.row + i2;
 }
 
+// The walk shared by spreading and interpolation: for each of the P^2 direction-2 rows of particle
+// p's window, f(base, wF, gd) with base the offset of the row's first point in a field and the
+// row's weights from row_weights.
+template <class F>
+void for_each_window_row(const GridGeometry& g, const ParticleWindows& win, long p, bool with_gradient, F&& f) {
+  double wF[64], gd[3][64];
+  const auto& s = win.start[std::size_t(p)];
+  for (int j0 = 0; j0 < g.P; ++j0) {
+    const int i0 = (s[0] + j0) % g.M[0];
+    for (int j1 = 0; j1 < g.P; ++j1) {
+      const int i1 = (s[1] + j1) % g.M[1];
+      row_weights(g, win, p, j0, j1, with_gradient, wF, gd);
+      f(grid_offset(g, i0, i1, s[2]), static_cast<const double*>(wF), static_cast<const double(*)[64]>(gd));
+    }
+  }
+}
+
 }  // namespace stokesian::ewald
