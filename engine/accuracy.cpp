@@ -25,6 +25,9 @@ AccuracyKnobs derive_knobs(double t, HydroModel level, double radius_ratio) {
   k.far_field = level == HydroModel::stokesian ? std::max(1e-14, kFarFieldFactor * t / (r * r * r)) : t;
   k.krylov = kKrylovFactor * t;
   k.mobility_cg = t;
+  // The Brownian force's relative error enters the noise covariance as about twice itself (tested
+  // against the dense sampler, tests/test_brownian.cpp).
+  k.brownian = t;
   return k;
 }
 

@@ -20,6 +20,7 @@ struct AccuracyKnobs {
   double far_field = 1e-6;  // relative accuracy asked of far-field products (MobilitySpec::tolerance)
   double krylov = 1e-6;     // relative residual of the accelerated SD Krylov solve
   double mobility_cg = 1e-6;  // relative residual of the far-field constrained CG solve
+  double brownian = 1e-6;     // relative change at which the Lanczos far-field Brownian force stops
 };
 
 // The knobs for a solve at `level` (far-field solves keep far_field = mobility_cg = tolerance,

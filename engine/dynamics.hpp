@@ -30,8 +30,16 @@ class Dynamics {
   // Evaluation at positions x and time t after the start of the step of s (t enters through the
   // Lees-Edwards strain of sheared boxes).
   virtual Evaluation evaluate(const State& s, const std::vector<Vec3>& x, double t) = 0;
-  // sqrt(2 kT dt) B W at the positions of s (zero for fixed particles); empty when athermal.
+  // The same with the Brownian force xi (from brownian_force) added to the given loads: the
+  // solve is R V = f + xi (engine/hydro_solver.hpp); noise == nullptr or empty: none.
+  virtual Evaluation evaluate(const State& s, const std::vector<Vec3>& x, double t, const VecX* noise) = 0;
+  // Displacement of Brownian motion without drift at the positions of s: sqrt(2 kT dt) M^{1/2} W
+  // for the far field, dt R^{-1} xi for solvers with a resistance (zero for fixed particles);
+  // empty when athermal.
   virtual std::vector<Vec3> brownian_displacement(const State& s, double dt, Rng& rng) = 0;
+  // Brownian force xi of covariance (2 kT / dt) R at the positions of s (engine/brownian.hpp,
+  // generalised layout of the model's moments); empty when athermal.
+  virtual VecX brownian_force(const State& s, double dt, Rng& rng) = 0;
 };
 
 }  // namespace stokesian

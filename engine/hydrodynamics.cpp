@@ -41,10 +41,24 @@ std::vector<PreparePhase> Hydrodynamics::prepare_phases(const Configuration& c) 
 }
 
 HydroResult Hydrodynamics::solve(const Configuration& c, const std::vector<char>& fixed, const std::vector<Vec3>& F,
-                                 const std::vector<Vec3>& T) {
+                                 const std::vector<Vec3>& T, const VecX* noise) {
   FlowSample sample;
   flow_.sample(c.x, sample);
-  return solver_->solve(HydroProblem{c, fixed, sample, F, T});
+  return solver_->solve(HydroProblem{c, fixed, sample, F, T, noise && noise->size() ? noise : nullptr});
+}
+
+VecX Hydrodynamics::brownian_force(const Configuration& c, const std::vector<char>& fixed, double kT, double dt,
+                                   Rng& rng) {
+  prepare(c);
+  return solver_->brownian_force(kT, dt, fixed, rng);
+}
+
+HydroResult Hydrodynamics::noise_velocity(const Configuration& c, const std::vector<char>& fixed, const VecX& xi) {
+  const std::size_t n = c.x.size();
+  FlowSample still;
+  AmbientFlow{}.sample(c.x, still);
+  const std::vector<Vec3> zero(n, Vec3::Zero());
+  return solver_->solve(HydroProblem{c, fixed, still, zero, zero, &xi});
 }
 
 HydroResult Hydrodynamics::solve(const std::vector<Vec3>& x, const std::vector<double>& a,

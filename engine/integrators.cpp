@@ -89,6 +89,16 @@ StepResult MidpointIntegrator::step(const State& s, const Evaluation& start, Dyn
   return r;
 }
 
+StepResult FixmanIntegrator::step(const State& s, const Evaluation& start, Dynamics& d, Rng& rng) {
+  const double dt = s.dt;
+  const VecX xi = d.brownian_force(s, dt, rng);
+  // First stage at x0: the deterministic solve of `start` is reused when athermal.
+  const std::vector<Vec3> U0 = xi.size() ? d.evaluate(s, s.position, 0.0, &xi).hydro.U : start.hydro.U;
+  const std::vector<Vec3> xmid = axpy(s.position, 0.5 * dt, U0);
+  const std::vector<Vec3> U1 = d.evaluate(s, xmid, 0.5 * dt, xi.size() ? &xi : nullptr).hydro.U;
+  return StepResult{axpy(s.position, dt, U1), dt, dt};
+}
+
 StepResult Rkf45Integrator::step(const State& s, const Evaluation& start, Dynamics& d, Rng&) {
   const VelocityField U = [&](const std::vector<Vec3>& x, double t) { return d.evaluate(s, x, t).hydro.U; };
   RkfStep k = rkf45_step(U, s.position, start.hydro.U, s.dt, tol_, dt_min_);

@@ -8,10 +8,18 @@
 //             solution is kept, the embedded 5th-order one estimates the local error
 //             e = max_i |x5_i - x4_i|; a step is accepted when e <= tol and the next
 //             dt = dt * clamp(0.9 (tol/e)^(1/5), 0.2, 5). Deterministic only.
-// dX_B = sqrt(2 kT dt) M^{1/2}(x0) W (Dynamics::brownian_displacement). With the far field alone
-// M is divergence free and Euler-Maruyama needs no drift; a solver with near-field resistance
-// (HydroSolver::needs_drift) needs a drift-corrected scheme (Fixman midpoint or random finite
-// differences), which is a further integrator here.
+//   fixman:   xi = Brownian force at x0, covariance (2 kT / dt) R(x0) (Dynamics::brownian_force);
+//             x' = x0 + dt/2 U(x0; F + xi),  x1 = x0 + dt U(x', t0 + dt/2; F(x') + xi)
+//             (Fixman 1978; seed 1 eqs. 2.34-2.35 and, in accelerated form, 2.52-2.53).
+// dX_B of euler and midpoint = sqrt(2 kT dt) M^{1/2}(x0) W (Dynamics::brownian_displacement). With
+// the far field alone at F/FT and no fixed particles M is divergence free and Euler-Maruyama needs
+// no drift. Where the mobility varies with the configuration in a way that is not divergence free
+// (near-field resistance, rigid stresslets, fixed particles: the model decides, engine/model.cpp)
+// the Ito drift kT div(R^{-1}) is required, and fixman provides it: expanding the second stage
+// about x0, E[R^{-1}(x') xi] = (dt/2) d_k R^{-1} E[(R^{-1} xi)_k xi] = kT d_k (R^{-1})_{. k}, since
+// E[xi xi^T] = (2 kT / dt) R; the covariance of dt R^{-1}(x') xi is 2 kT dt R^{-1} + O(dt^2).
+// Rotations are not integrated (spheres: hydrodynamics does not depend on orientation, so the
+// rotational part of the divergence vanishes); xi still has torque entries, which couple.
 #include "engine/dynamics.hpp"
 
 #include <functional>
@@ -42,6 +50,12 @@ class EulerIntegrator final : public Integrator {
 class MidpointIntegrator final : public Integrator {
  public:
   const char* name() const override { return "midpoint"; }
+  StepResult step(const State& s, const Evaluation& start, Dynamics& d, Rng& rng) override;
+};
+
+class FixmanIntegrator final : public Integrator {
+ public:
+  const char* name() const override { return "fixman"; }
   StepResult step(const State& s, const Evaluation& start, Dynamics& d, Rng& rng) override;
 };
 

@@ -34,25 +34,28 @@ Registry<SolverEntry> make_solvers() {
   r.add({"mobility_cg", "far-field mobility, constrained entries by conjugate gradients", HydroModel::far_field,
          true, false, true, 0, 0,
          [](SolverSetup s) { return std::make_unique<MobilitySolver>(std::move(s.far_field), s.knobs.mobility_cg); }});
-  r.add({"dense_sd", "far field + lubrication, dense Cholesky (reference)", HydroModel::stokesian, true, true, false,
+  r.add({"dense_sd", "far field + lubrication, dense Cholesky (reference)", HydroModel::stokesian, true, true, true,
          kDenseSdMaxOpen, kDenseSdMaxPeriodic, [](SolverSetup s) {
            return std::make_unique<DenseStokesianDynamics>(std::move(s.far_field), s.spec.viscosity, s.near_field);
          }});
   r.add({"accelerated_sd", "far field + lubrication, matrix-free GMRES preconditioned by the CHOLMOD factor of the near field",
-         HydroModel::stokesian, true, false, false, 0, 0, [](SolverSetup s) {
-           return std::make_unique<AcceleratedStokesianDynamics>(std::move(s.far_field), s.spec.viscosity, s.near_field,
-                                                                 s.knobs.krylov);
+         HydroModel::stokesian, true, false, true, 0, 0, [](SolverSetup s) {
+           return std::make_unique<AcceleratedStokesianDynamics>(
+               std::move(s.far_field), s.spec.viscosity, s.near_field, s.knobs.krylov, AcceleratedStokesianDynamics::kShift,
+               AcceleratedStokesianDynamics::Method::gmres, AcceleratedStokesianDynamics::kFactorGap, s.knobs.brownian);
          }});
   return r;
 }
 
 Registry<IntegratorEntry> make_integrators() {
   Registry<IntegratorEntry> r("integrator");
-  r.add({"euler", "Euler-Maruyama, first order", true,
+  r.add({"euler", "Euler-Maruyama, first order", true, false,
          [](const TimeParams&) { return std::make_unique<EulerIntegrator>(); }});
-  r.add({"midpoint", "explicit midpoint, second order (deterministic part)", true,
+  r.add({"midpoint", "explicit midpoint, second order (deterministic part)", true, false,
          [](const TimeParams&) { return std::make_unique<MidpointIntegrator>(); }});
-  r.add({"rkf45", "Runge-Kutta-Fehlberg 4(5), adaptive step", false, [](const TimeParams& t) {
+  r.add({"fixman", "Fixman midpoint: one Brownian force for both stages, gives the thermal drift", true, true,
+         [](const TimeParams&) { return std::make_unique<FixmanIntegrator>(); }});
+  r.add({"rkf45", "Runge-Kutta-Fehlberg 4(5), adaptive step", false, false, [](const TimeParams& t) {
            return std::make_unique<Rkf45Integrator>(t.rkf_tolerance, kRkfMinStepFraction * t.dt);
          }});
   return r;

@@ -49,6 +49,7 @@ struct IntegratorEntry {
   std::string name;
   std::string description;
   bool stochastic = true;  // accepts Brownian displacements
+  bool drift = false;      // its Brownian steps include the thermal drift kT div(mobility)
   std::function<std::unique_ptr<Integrator>(const TimeParams&)> make;
 };
 

@@ -1,5 +1,6 @@
 #include "engine/mobility_solver.hpp"
 
+#include "engine/brownian.hpp"
 #include "engine/core/errors.hpp"
 #include "engine/core/krylov.hpp"
 #include "engine/kernels/far_field.hpp"
@@ -91,6 +92,11 @@ std::vector<Vec3> MobilitySolver::brownian_displacement(double kT, double dt, Rn
   return dx;
 }
 
+VecX MobilitySolver::brownian_force(double kT, double dt, const std::vector<char>& fixed, Rng& rng) {
+  return far_field_brownian_force(*op_, force_given_flags(op_->moments(), n_, fixed), std::sqrt(2.0 * kT / dt), tol_,
+                                  rng);
+}
+
 FreeDrainingSolver::FreeDrainingSolver(const MobilitySpec& spec)
     : MobilitySolver(std::make_unique<SelfMobility>(spec), spec.tolerance), mu_(spec.viscosity) {}
 
@@ -103,6 +109,20 @@ std::vector<Vec3> FreeDrainingSolver::brownian_displacement(double kT, double dt
     for (int k = 0; k < 3; ++k) dx[i][k] = pref * std::sqrt(D) * rng.normal();
   }
   return dx;
+}
+
+VecX FreeDrainingSolver::brownian_force(double kT, double dt, const std::vector<char>& fixed, Rng& rng) {
+  const auto& a = static_cast<const SelfMobility&>(*op_).radii();
+  const Moments m = op_->moments();
+  const VecX R = self_resistance(a, mu_, m);
+  const std::vector<char> given = force_given_flags(m, long(a.size()), fixed);
+  const double pref = std::sqrt(2.0 * kT / dt);
+  VecX xi(R.size());
+  for (long q = 0; q < R.size(); ++q) {
+    const double z = rng.normal();
+    xi[q] = given[std::size_t(q)] ? pref * std::sqrt(R[q]) * z : 0.0;
+  }
+  return xi;
 }
 
 }  // namespace stokesian

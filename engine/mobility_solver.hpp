@@ -14,7 +14,8 @@
 // diagonal, sqrt(D_i) = (6 pi mu a_i)^{-1/2} per translational component. Far field: M^{1/2} W by
 // Lanczos (engine/core/krylov.hpp) on the operator at the solve's moments, translational part
 // kept. M_inf is divergence free (translational blocks are built from the transverse projector),
-// so no thermal drift term is needed.
+// so no thermal drift term is needed. Brownian forces for the Fixman scheme (FTS, fixed particles,
+// whose constrained mobilities are not divergence free): engine/brownian.hpp.
 #include "engine/hydro_solver.hpp"
 
 #include <memory>
@@ -30,6 +31,8 @@ class MobilitySolver : public HydroSolver {
   void prepare(const Configuration& c) override;
   HydroResult solve(const HydroProblem& p) override;
   std::vector<Vec3> brownian_displacement(double kT, double dt, Rng& rng) override;
+  // sqrt(2 kT / dt) M^{-1/2} psi on the given entries (Lanczos, engine/brownian.hpp).
+  VecX brownian_force(double kT, double dt, const std::vector<char>& fixed, Rng& rng) override;
   bool needs_drift() const override { return false; }
   bool prepare_uses_threads(long n) const override { return op_->set_configuration_uses_threads(n); }
   const MobilityOperator* far_field() const override { return op_.get(); }
@@ -46,6 +49,8 @@ class FreeDrainingSolver final : public MobilitySolver {
   FreeDrainingSolver(const MobilitySpec& spec);
   const char* name() const override { return "free_draining"; }
   std::vector<Vec3> brownian_displacement(double kT, double dt, Rng& rng) override;
+  // sqrt(2 kT / dt) R_self^{1/2} psi: exact (diagonal).
+  VecX brownian_force(double kT, double dt, const std::vector<char>& fixed, Rng& rng) override;
   const MobilityOperator* far_field() const override { return nullptr; }
 
  private:

@@ -69,8 +69,7 @@ const SolverEntry* usable_solver(HydroModel level, const Scene& s, bool brownian
     if (e.level != level) continue;
     if (!named.empty() && e.name != named) continue;
     // auto at the SD level: dense up to the crossover, accelerated beyond.
-    if (named.empty() && level == HydroModel::stokesian && !brownian &&
-        (e.name == "dense_sd") != (n <= dense_up_to)) {
+    if (named.empty() && level == HydroModel::stokesian && (e.name == "dense_sd") != (n <= dense_up_to)) {
       all += (all.empty() ? "" : "; ") + e.name + ": not the cheaper one for N = " + std::to_string(n) +
              " (dense up to " + std::to_string(dense_up_to) + ")";
       continue;
@@ -283,17 +282,6 @@ ResolvedModel resolve_model(const Scene& s) {
       }
       m.reasons.push_back(r.str());
     }
-    if (m.brownian && m.moments == Moments::FTS)
-      unavailable(s, "hydrodynamics", "moments",
-                  "Brownian motion with rigid-particle stresslets (FTS) needs a Stokesian-dynamics Brownian solver, "
-                  "which no solver provides; use moments = \"FT\" or kT = 0");
-    if (m.brownian && m.fixed_particles)
-      unavailable(s, "hydrodynamics", "model",
-                  "Brownian motion with fixed particles needs a constrained Brownian solver (noise and drift of the "
-                  "mobile particles given the fixed ones), which this version does not have. What works instead: "
-                  "kT = 0 with the fixed particles (deterministic constrained dynamics, any model), or "
-                  "model = \"free_draining\" with kT > 0 (fixed particles held, no hydrodynamic coupling), or "
-                  "kT > 0 without fixed particles (far_field)");
   }
 
   // Integrator.
@@ -301,6 +289,26 @@ ResolvedModel resolve_model(const Scene& s) {
   if (!integ)
     unavailable(s, "time", "integrator", "\"" + s.time.integrator + "\" is not one of " + quoted_list(integrators().names()));
   m.integrator = integ->name;
+  // Thermal drift kT div(R^{-1}) (engine/integrators.hpp): needed wherever the sampled mobility is
+  // not divergence free: any near-field resistance, or far-field mobilities constrained by rigid
+  // stresslets or fixed particles (Schur complements of M_inf). Free draining and the plain far
+  // field (F, FT, no fixed particles) have none.
+  m.drift = m.brownian && (m.level == HydroModel::stokesian ||
+                           (m.level == HydroModel::far_field && (m.moments == Moments::FTS || m.fixed_particles)));
+  if (m.drift && !integ->drift) {
+    const std::string why = m.level == HydroModel::stokesian ? "the near-field resistance"
+                            : m.moments == Moments::FTS      ? "the rigid-stresslet constraint"
+                                                             : "the fixed particles";
+    if (s.lines.count("time.integrator") == 0) {
+      m.integrator = "fixman";
+      m.reasons.push_back("auto integrator: Brownian motion with " + why +
+                          " needs the thermal drift kT div(R^-1) -> fixman (Fixman midpoint; set [time] integrator to choose)");
+    } else {
+      unavailable(s, "time", "integrator",
+                  "\"" + integ->name + "\" omits the thermal drift kT div(R^-1), which Brownian motion with " + why +
+                      " needs for the right equilibrium; use \"fixman\"");
+    }
+  }
   if (m.brownian && !integ->stochastic)
     unavailable(s, "time", "integrator", "\"" + integ->name + "\" is deterministic; with fluid.kT > 0 use " +
                                              [] {

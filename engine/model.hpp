@@ -21,6 +21,7 @@ struct ResolvedModel {
   std::string integrator = "euler";
   bool brownian = false;
   bool fixed_particles = false;
+  bool drift = false;  // Brownian with a mobility that is not divergence free: fixman integrator
   std::vector<std::string> reasons;  // one line per decision
   std::string describe() const;      // multi-line, printed by `stokesian check` and stored in outputs
   ModelKey key() const;              // the run's identity for resume

@@ -1,5 +1,7 @@
 #include "engine/sd_accelerated.hpp"
 
+#include "engine/brownian.hpp"
+
 #include "engine/core/errors.hpp"
 #include "engine/core/parallel.hpp"
 
@@ -15,27 +17,14 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// Self resistance per generalised entry: 6 pi mu a (F), 8 pi mu a^3 (T), 20/3 pi mu a^3 (S, in
-// the orthonormal symmetric-traceless coordinates of engine/core/sym_traceless.hpp), the inverse of
-// the self mobility of engine/kernels/far_field.hpp.
-VecX self_resistance(const std::vector<double>& a, double mu, Moments m) {
-  const int d = dof_per_particle(m);
-  VecX D(long(a.size()) * d);
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    const double r = a[i], r3 = r * r * r;
-    for (int c = 0; c < d; ++c)
-      D[long(i) * d + c] = c < 3 ? 6.0 * kPi * mu * r : c < 6 ? 8.0 * kPi * mu * r3 : 20.0 / 3.0 * kPi * mu * r3;
-  }
-  return D;
-}
-
 }  // namespace
 
 AcceleratedStokesianDynamics::AcceleratedStokesianDynamics(std::unique_ptr<MobilityOperator> far_field, double mu,
                                                            lubrication::NearFieldParams p, double krylov_tolerance,
-                                                           double shift, Method method, double factor_gap)
+                                                           double shift, Method method, double factor_gap,
+                                                           double brownian_tolerance)
     : m_(far_field->moments()), mu_(mu), op_(std::move(far_field)), near_(m_, mu, p), tol_(krylov_tolerance),
-      shift_(shift), factor_gap_(factor_gap), method_(method) {}
+      shift_(shift), factor_gap_(factor_gap), brownian_tol_(brownian_tolerance), method_(method) {}
 
 void AcceleratedStokesianDynamics::set_far_field(const Configuration& c) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -204,8 +193,22 @@ HydroResult AcceleratedStokesianDynamics::solve(const HydroProblem& p) {
 }
 
 std::vector<Vec3> AcceleratedStokesianDynamics::brownian_displacement(double, double, Rng&) {
-  throw PhysicsError("accelerated Stokesian dynamics does not sample Brownian motion yet (near-field noise and "
-                     "drift come with the Brownian SD issue)");
+  throw PhysicsError("accelerated Stokesian dynamics samples Brownian motion through brownian_force and a "
+                     "drift-corrected integrator (fixman), not by displacements");
+}
+
+VecX AcceleratedStokesianDynamics::brownian_force(double kT, double dt, const std::vector<char>& fixed, Rng& rng) {
+  const std::vector<char> given = force_given_flags(m_, long(config_.x.size()), fixed);
+  const double pref = std::sqrt(2.0 * kT / dt);
+  auto t0 = std::chrono::steady_clock::now();
+  LanczosReport lr;
+  VecX xi = far_field_brownian_force(*op_, given, pref, brownian_tol_, rng, &lr);
+  stats_.lanczos_iterations = lr.iterations;
+  stats_.seconds_far_noise = seconds_since(t0);
+  t0 = std::chrono::steady_clock::now();
+  xi += pref * near_.brownian_force(config_.x, config_.a, config_.domain, given, rng.with_minor(1));
+  stats_.seconds_near_noise = seconds_since(t0);
+  return xi;
 }
 
 }  // namespace stokesian

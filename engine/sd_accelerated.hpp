@@ -51,6 +51,8 @@ struct AcceleratedSdStats {
   long factor_nonzeros = 0;     // fill of the CHOLMOD factor of R~
   double seconds_far_field_setup = 0.0, seconds_near_field_assembly = 0.0, seconds_factorisation = 0.0;
   double seconds_krylov = 0.0;  // last solve's Krylov iterations (products and triangular solves)
+  int lanczos_iterations = 0;   // far-field products of the last Brownian force
+  double seconds_far_noise = 0.0, seconds_near_noise = 0.0;  // last Brownian force's two parts
 };
 
 class AcceleratedStokesianDynamics final : public HydroSolver {
@@ -61,7 +63,8 @@ class AcceleratedStokesianDynamics final : public HydroSolver {
   // factor_gap: pairs with a symmetric gap at or above it keep only their diagonal blocks in R~.
   AcceleratedStokesianDynamics(std::unique_ptr<MobilityOperator> far_field, double mu,
                                lubrication::NearFieldParams p, double krylov_tolerance, double shift = kShift,
-                               Method method = Method::gmres, double factor_gap = kFactorGap);
+                               Method method = Method::gmres, double factor_gap = kFactorGap,
+                               double brownian_tolerance = 1e-6);
   // Measured with bench_asd ("krylov", periodic FTS, N = 500, tolerance 1e-4; docs/accelerated_sd.md):
   // at phi = 0.45 the shift 0.3 / 1 / 3 / 10 takes 31 / 27 / 24 / 26 iterations with factor_gap 0.1,
   // and factor_gap all / 0.5 / 0.1 / 0.02 takes 25 / 25 / 24 / 31 iterations at shift 3 with factor
@@ -74,6 +77,8 @@ class AcceleratedStokesianDynamics final : public HydroSolver {
   void prepare(const Configuration& c) override;
   HydroResult solve(const HydroProblem& p) override;
   std::vector<Vec3> brownian_displacement(double kT, double dt, Rng& rng) override;
+  // engine/brownian.hpp: far field by Lanczos M_inf^{-1/2} psi (brownian_tolerance), near field by pairs.
+  VecX brownian_force(double kT, double dt, const std::vector<char>& fixed, Rng& rng) override;
   bool needs_drift() const override { return true; }
   bool prepare_uses_threads(long n) const override { return op_->set_configuration_uses_threads(n); }
   // far_field_setup | near_field_assembly -> factorisation (the factorisation runs on one thread
@@ -94,7 +99,7 @@ class AcceleratedStokesianDynamics final : public HydroSolver {
   double mu_;
   std::unique_ptr<MobilityOperator> op_;
   lubrication::NearField near_;
-  double tol_, shift_, factor_gap_;
+  double tol_, shift_, factor_gap_, brownian_tol_;
   lubrication::SparseMatrix Rt_;  // R~ (upper triangle), the factorised matrix
   Method method_;
   StoredConfiguration config_;

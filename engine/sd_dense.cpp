@@ -1,5 +1,7 @@
 #include "engine/sd_dense.hpp"
 
+#include "engine/brownian.hpp"
+
 #include "engine/core/errors.hpp"
 #include "engine/kernels/far_field.hpp"
 #include "ewald/ewald_reference.hpp"
@@ -111,6 +113,7 @@ void DenseStokesianDynamics::select_reference_operator(const Domain& domain) {
 void DenseStokesianDynamics::prepare(const Configuration& c) {
   if (reference_) select_reference_operator(c.domain);
   op_->set_configuration(c);
+  config_.store(c);
   const MatX* M = op_->dense();
   if (!M) throw std::logic_error(std::string("dense Stokesian dynamics needs a dense far field, not \"") + op_->name() + "\"");
   have_Rvv_ = have_R_ = false;
@@ -240,7 +243,24 @@ HydroResult DenseStokesianDynamics::solve(const HydroProblem& p) {
 }
 
 std::vector<Vec3> DenseStokesianDynamics::brownian_displacement(double, double, Rng&) {
-  throw PhysicsError("dense Stokesian dynamics does not sample Brownian motion (it needs near-field noise and drift)");
+  throw PhysicsError("dense Stokesian dynamics samples Brownian motion through brownian_force and a drift-corrected "
+                     "integrator (fixman), not by displacements");
+}
+
+VecX DenseStokesianDynamics::brownian_force(double kT, double dt, const std::vector<char>& fixed, Rng& rng) {
+  const int d = dof_per_particle(m_);
+  const long n = L_.rows();
+  const std::vector<char> given = force_given_flags(m_, n / d, fixed);
+  VecX psi(n);
+  for (auto& v : psi) v = rng.normal();
+  const VecX z = L_.triangularView<Eigen::Lower>().transpose().solve(psi);  // L^{-T} psi, factored order
+  VecX xi = near_.brownian_force(config_.x, config_.a, config_.domain, given, rng.with_minor(1));
+  const double pref = std::sqrt(2.0 * kT / dt);
+  for (long r = 0; r < n; ++r) {
+    const long q = perm_[std::size_t(r)];
+    xi[q] = given[std::size_t(q)] ? pref * (xi[q] + z[r]) : 0.0;
+  }
+  return xi;
 }
 
 MatX DenseStokesianDynamics::resistance(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain,

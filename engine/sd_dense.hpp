@@ -43,6 +43,9 @@ class DenseStokesianDynamics final : public HydroSolver {
   void prepare(const Configuration& c) override;
   HydroResult solve(const HydroProblem& p) override;
   std::vector<Vec3> brownian_displacement(double kT, double dt, Rng& rng) override;
+  // Reference sampler (engine/brownian.hpp): far field P^T L^{-T} psi with L the dense Cholesky
+  // factor of P M_inf P^T (covariance M_inf^{-1} exactly), near field by pairs.
+  VecX brownian_force(double kT, double dt, const std::vector<char>& fixed, Rng& rng) override;
   bool needs_drift() const override { return true; }
   // Dense Cholesky and the near-field assembly use every thread.
   bool prepare_uses_threads(long) const override { return true; }
@@ -71,6 +74,7 @@ class DenseStokesianDynamics final : public HydroSolver {
   std::unique_ptr<MobilityOperator> op_;
   lubrication::NearField near_;
   lubrication::NearFieldStats stats_;
+  StoredConfiguration config_;  // the prepared configuration (near-field Brownian forces)
   std::vector<long> perm_;   // perm_[r] = generalised entry at row r of the factored order
   std::vector<long> pos_;    // inverse of perm_
   long n0_ = 0;              // rows before the trailing (force/torque) block

@@ -77,8 +77,12 @@ Evaluation Simulation::evaluate(const State& s, const std::vector<Vec3>& x, doub
   return evaluate_checked(s, x, t, diagnostics, nullptr);
 }
 
+Evaluation Simulation::evaluate(const State& s, const std::vector<Vec3>& x, double t, const VecX* noise) {
+  return evaluate_checked(s, x, t, false, nullptr, noise);
+}
+
 Evaluation Simulation::evaluate_checked(const State& s, const std::vector<Vec3>& x, double t, bool diagnostics,
-                                        GapSurvey* overlaps) {
+                                        GapSurvey* overlaps, const VecX* noise) {
   // Where this evaluation is, for messages: the state of a step, or an integrator stage within it.
   auto at = [&] {
     std::ostringstream o;
@@ -162,7 +166,7 @@ Evaluation Simulation::evaluate_checked(const State& s, const std::vector<Vec3>&
 
   const auto t0 = std::chrono::steady_clock::now();
   try {
-    ev.hydro = hydro_.solve(c, s.fixed, ev.force, ev.torque);
+    ev.hydro = hydro_.solve(c, s.fixed, ev.force, ev.torque, noise);
   } catch (const PhysicsError& e) {
     throw PhysicsError(at() + ": " + e.what() + closest_pairs(x, s.radius, domain));
   }
@@ -183,9 +187,26 @@ Evaluation Simulation::evaluate_checked(const State& s, const std::vector<Vec3>&
   return ev;
 }
 
+VecX Simulation::brownian_force(const State& s, double dt, Rng& rng) {
+  if (!model_.brownian) return {};
+  try {
+    return hydro_.brownian_force({s.position, s.radius, s.domain}, s.fixed, scene_.fluid.kT, dt, rng);
+  } catch (const PhysicsError& e) {
+    throw PhysicsError("step " + std::to_string(s.step) + ": " + e.what() + closest_pairs(s.position, s.radius, s.domain));
+  }
+}
+
 std::vector<Vec3> Simulation::brownian_displacement(const State& s, double dt, Rng& rng) {
   if (!model_.brownian) return {};
-  std::vector<Vec3> dX = hydro_.brownian_displacement(s.position, s.radius, scene_.fluid.kT, dt, rng, s.domain);
+  std::vector<Vec3> dX;
+  if (model_.drift) {  // a resistance solver: dt R^{-1} xi (no drift; tests of the drift use this)
+    const Configuration c{s.position, s.radius, s.domain};
+    const VecX xi = brownian_force(s, dt, rng);
+    dX = hydro_.noise_velocity(c, s.fixed, xi).U;
+    for (auto& v : dX) v *= dt;
+  } else {
+    dX = hydro_.brownian_displacement(s.position, s.radius, scene_.fluid.kT, dt, rng, s.domain);
+  }
   for (std::size_t i = 0; i < dX.size(); ++i)
     if (!s.fixed.empty() && s.fixed[i]) dX[i] = Vec3::Zero();
   return dX;

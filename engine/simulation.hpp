@@ -47,7 +47,9 @@ class Simulation final : public Dynamics {
     return evaluate(s, x, t, false);
   }
   Evaluation evaluate(const State& s, const std::vector<Vec3>& x, double t, bool diagnostics);
+  Evaluation evaluate(const State& s, const std::vector<Vec3>& x, double t, const VecX* noise) override;
   std::vector<Vec3> brownian_displacement(const State& s, double dt, Rng& rng) override;
+  VecX brownian_force(const State& s, double dt, Rng& rng) override;
 
   Frame frame(const State& s, const Evaluation& ev) const;
   RunHeader header() const;
@@ -81,7 +83,7 @@ class Simulation final : public Dynamics {
   // evaluate(), plus (overlaps != nullptr) the overlapping pairs of x, checked against
   // [run] max_overlap before the solve; every failure is a PhysicsError naming step and particles.
   Evaluation evaluate_checked(const State& s, const std::vector<Vec3>& x, double t, bool diagnostics,
-                              GapSurvey* overlaps);
+                              GapSurvey* overlaps, const VecX* noise = nullptr);
   Scene scene_;
   ResolvedModel model_;
   double strain_rate_;  // d(Lees-Edwards strain)/dt of the box

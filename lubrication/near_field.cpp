@@ -209,6 +209,76 @@ void NearField::factorize(const SparseMatrix& R, CholmodFactor& factor, const st
   }
 }
 
+VecX NearField::brownian_force(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain,
+                               const std::vector<char>& given, const RandomStream& rng) const {
+  const int d = dof_per_particle(m_);
+  const long n = long(x.size());
+  if (long(given.size()) != n * d) throw std::invalid_argument("NearField::brownian_force: `given` needs d N flags");
+  VecX f = VecX::Zero(n * d);
+  if (n < 2) return f;
+  const double amax = *std::max_element(a.begin(), a.end());
+  tables_.prepare_radii(a);
+  // The same pairs, weights and order as assemble().
+  const auto pairs = trees::neighbor_pairs(x, a, domain, (p_.cutoff - 2.0) * amax);
+  std::vector<std::size_t> in;
+  std::vector<double> wt;
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    const auto& p = pairs[k];
+    const double w = weight(2.0 * p.dist / (a[std::size_t(p.i)] + a[std::size_t(p.j)]));
+    if (w > 0.0) {
+      in.push_back(k);
+      wt.push_back(w);
+    }
+  }
+  const std::size_t stride = std::size_t(2 * d);
+  std::vector<double> out(in.size() * stride, 0.0);  // each pair's force on its 2 d entries
+  std::vector<double> worst_pivot(in.size(), 0.0);    // most negative relative pivot per pair
+#pragma omp parallel for schedule(dynamic, 8) if (long(in.size()) >= parallel::kNearFieldPairs)
+  for (long m = 0; m < long(in.size()); ++m) {
+    const auto& p = pairs[in[std::size_t(m)]];
+    int idx[22], k = 0;  // given entries of the pair, in pair layout [i entries, j entries]
+    for (int u = 0; u < 2 * d; ++u)
+      if (given[std::size_t((u < d ? p.i : p.j) * d + u % d)]) idx[k++] = u;
+    if (k == 0) continue;
+    const MatX B = pair_block(-p.r, a[std::size_t(p.i)], a[std::size_t(p.j)]);
+    MatX Bg(k, k);
+    for (int r = 0; r < k; ++r)
+      for (int c = 0; c < k; ++c) Bg(r, c) = wt[std::size_t(m)] * B(idx[r], idx[c]);
+    const Eigen::LDLT<MatX> ldlt(Bg);
+    VecX D = ldlt.vectorD();
+    const double dmax = D.cwiseAbs().maxCoeff();
+    worst_pivot[std::size_t(m)] = dmax > 0 ? D.minCoeff() / dmax : 0.0;
+    D = D.cwiseMax(0.0).cwiseSqrt();
+    RandomStream r = rng;
+    r.seek_normal(std::uint64_t(m) * stride);
+    VecX w(k);
+    for (int q = 0; q < 2 * d; ++q) {  // 2 d draws per pair whatever k is (fixed slice)
+      const double z = r.normal();
+      if (q < k) w[q] = z;
+    }
+    VecX t = ldlt.matrixL() * D.cwiseProduct(w).eval();
+    t = ldlt.transpositionsP().transpose() * t;
+    double* o = out.data() + std::size_t(m) * stride;
+    for (int q = 0; q < k; ++q) o[idx[q]] = t[q];
+  }
+  for (std::size_t m = 0; m < in.size(); ++m) {
+    const auto& p = pairs[in[m]];
+    if (worst_pivot[m] < -1e-10) {
+      std::ostringstream o;
+      o << "near-field Brownian force: the lubrication block of pair (" << p.i << ", " << p.j
+        << ") is not positive semi-definite (relative pivot " << worst_pivot[m] << ") at symmetric gap "
+        << 2.0 * p.dist / (a[std::size_t(p.i)] + a[std::size_t(p.j)]) - 2.0;
+      throw PhysicsError(o.str());
+    }
+    const double* o = out.data() + m * stride;
+    for (int u = 0; u < d; ++u) {
+      f[long(p.i) * d + u] += o[u];
+      f[long(p.j) * d + u] += o[d + u];
+    }
+  }
+  return f;
+}
+
 MatX NearField::assemble_dense(const std::vector<Vec3>& x, const std::vector<double>& a) const {
   const int d = dof_per_particle(m_);
   const long n = long(x.size());

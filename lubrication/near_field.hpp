@@ -66,6 +66,19 @@ class NearField {
   // The exact two-sphere resistance at the solve's moment level (2d x 2d).
   MatX exact_pair(const Vec3& r_vec, double ai, double aj) const;
 
+  // Near-field Brownian force of unit temperature scale: f = sum over pairs p of L_p w_p, with
+  // L_p L_p^T the pair's weighted block w(s) B_p restricted to the entries flagged in `given`
+  // (length d N: the entries whose force is given, i.e. the mobile particles' F and T) and w_p
+  // standard normal, independent for every pair (Banchio & Brady 2003, eq. 2.11; seed 1 eq. 2.51,
+  // with the per-pair vectors of method notes P13). Its covariance is exactly R_nf restricted to
+  // `given` (each restricted pair block is a principal sub-matrix of a positive definite block).
+  // L_p from a pivoted LDL^T, so that a block that is positive semi-definite to round-off works;
+  // a pivot below -1e-10 of the largest is a PhysicsError naming the pair. Pair m (in the pair
+  // order of assemble()) draws normals 2 d m .. 2 d m + 2 d - 1 of `rng`: the same numbers for
+  // every thread count. Zero at entries not given.
+  VecX brownian_force(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain,
+                      const std::vector<char>& given, const RandomStream& rng) const;
+
   // Factorises R (R_nf plus whatever the caller added, e.g. the preconditioner's diagonal) with
   // CHOLMOD. A failure is reported as PhysicsError naming the particle of the failing column and
   // its closest neighbour with their symmetric gap.

@@ -54,10 +54,23 @@ TEST_CASE("model resolution: cheapest adequate level and moments, recorded with 
   CHECK(model("[forces]\nexternal_torque = [0, 0, 1]\n").moments == Moments::FT);
   CHECK(model("[hydrodynamics]\nmodel = \"free_draining\"\n").level == HydroModel::free_draining);
   CHECK(model("[hydrodynamics]\nmoments = \"FTS\"\n").moments == Moments::FTS);
-  // Close pairs in an open athermal scene resolve to Stokesian dynamics; Brownian ones cannot yet.
+  // Close pairs resolve to Stokesian dynamics, athermal or Brownian (then with the Fixman midpoint
+  // integrator, which gives the thermal drift; an explicit driftless integrator is refused).
   const std::string close = "[particles]\npositions = [[0,0,0],[2.1,0,0]]\n";
   CHECK(resolve_model(io::parse_scene(close, "c.toml")).level == HydroModel::stokesian);
-  CHECK(resolve_model(io::parse_scene(close + "[fluid]\nkT = 1.0\n", "c.toml")).level == HydroModel::far_field);
+  const ResolvedModel bsd = resolve_model(io::parse_scene(close + "[fluid]\nkT = 1.0\n", "c.toml"));
+  CHECK(bsd.level == HydroModel::stokesian);
+  CHECK(bsd.integrator == "fixman");
+  CHECK(bsd.drift);
+  CHECK(contains(bsd.describe(), "auto integrator"));
+  const std::string e_euler = error_of(close + "[fluid]\nkT = 1.0\n[time]\nintegrator = \"euler\"\n");
+  CHECK(contains(e_euler, "[time] integrator"));
+  CHECK(contains(e_euler, "thermal drift"));
+  CHECK(contains(e_euler, "fixman"));
+  // The far field alone needs no drift at F/FT: the integrator stays Euler-Maruyama.
+  const ResolvedModel ff = resolve_model(io::parse_scene(kTwo + "[fluid]\nkT = 1.0\n", "f.toml"));
+  CHECK(ff.integrator == "euler");
+  CHECK_FALSE(ff.drift);
   // Periodic boxes: PME far field by default, dense Ewald under Stokesian dynamics.
   const std::string box = "[domain]\nkind = \"periodic\"\nbox = [12, 12, 12]\n";
   const ResolvedModel pm = resolve_model(io::parse_scene(box + kTwo + "[fluid]\nkT = 1.0\n", "p.toml"));
@@ -132,12 +145,10 @@ TEST_CASE("bad input names the file, line, key and allowed values") {
 }
 
 TEST_CASE("asking for a model the engine lacks is an error, not a fallback") {
-  CHECK(contains(error_of(kTwo + "[fluid]\nkT = 1.0\n[hydrodynamics]\nmodel = \"stokesian\"\n"), "Brownian"));
   CHECK(contains(error_of("[domain]\nkind = \"periodic\"\nbox = [10, 10, 10]\n" + kTwo +
                           "[hydrodynamics]\nfar_field = \"direct\"\n"), "no periodic images"));
   CHECK(contains(error_of(kTwo + "[hydrodynamics]\nfar_field = \"pme\"\n"), "needs a periodic domain"));
   CHECK(contains(error_of(kTwo + "[hydrodynamics]\nfar_field = \"tree\"\n"), "not in this version"));
-  CHECK(contains(error_of(kTwo + "[fluid]\nkT = 1.0\n[flow]\nkind = \"simple_shear\"\nrate = 1.0\n"), "FTS"));
   CHECK(contains(error_of(kTwo + "[fluid]\nkT = 1.0\n[time]\nintegrator = \"rkf45\"\n"), "rkf45"));
   CHECK(contains(error_of(kTwo + "[forces]\nexternal_torque = [0,0,1]\n[hydrodynamics]\nmoments = \"F\"\n"), "torques"));
 }
@@ -210,11 +221,15 @@ TEST_CASE("a recorded quantity the model does not compute is refused, naming the
   CHECK(old.output.record == std::vector<std::string>{"all"});
 }
 
-TEST_CASE("Brownian motion with fixed particles is refused with what works instead, and each alternative resolves") {
+TEST_CASE("Brownian motion with fixed particles, with stresslets, or with Stokesian dynamics resolves to fixman") {
   const std::string fixed = "[particles]\npositions = [[0,0,0],[3,0,0],[6,0,0]]\nfixed = [true, false, false]\n";
-  const std::string e = error_of(fixed + "[fluid]\nkT = 1.0\n");
-  CHECK(contains(e, "[hydrodynamics] model"));
-  CHECK(contains(e, "What works instead"));
+  const ResolvedModel m = resolve_model(io::parse_scene(fixed + "[fluid]\nkT = 1.0\n", "w.toml"));
+  CHECK(m.integrator == "fixman");
+  CHECK(contains(m.describe(), "fixed particles"));
+  const ResolvedModel sh = resolve_model(io::parse_scene(kTwo + "[fluid]\nkT = 1.0\n[flow]\nkind = \"simple_shear\"\nrate = 1.0\n", "s.toml"));
+  CHECK(sh.moments == Moments::FTS);
+  CHECK(sh.integrator == "fixman");
+  CHECK(error_of(kTwo + "[fluid]\nkT = 1.0\n[hydrodynamics]\nmodel = \"stokesian\"\n").empty());
   CHECK(error_of(fixed + "[fluid]\nkT = 0.0\n").empty());
   CHECK(error_of(fixed + "[fluid]\nkT = 0.0\n[hydrodynamics]\nmodel = \"stokesian\"\n").empty());
   CHECK(error_of(fixed + "[fluid]\nkT = 1.0\n[hydrodynamics]\nmodel = \"free_draining\"\n").empty());

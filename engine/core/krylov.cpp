@@ -108,7 +108,7 @@ KrylovResult conjugate_gradient(const LinearOperator& A, const VecX& b, VecX& x,
   }
 }
 
-KrylovResult lanczos_sqrt(const LinearOperator& A, const VecX& z, VecX& y, double tol, int max_iter) {
+KrylovResult lanczos_power(const LinearOperator& A, const VecX& z, VecX& y, double power, double tol, int max_iter) {
   KrylovResult res;
   const double znorm = z.norm();
   y.setZero(z.size());
@@ -146,12 +146,13 @@ KrylovResult lanczos_sqrt(const LinearOperator& A, const VecX& z, VecX& y, doubl
     }
     Eigen::SelfAdjointEigenSolver<MatX> eig(T);
     const double lmin = eig.eigenvalues()(0), lmax = eig.eigenvalues().cwiseAbs().maxCoeff();
-    if (lmin < -negative * lmax) {
+    if (lmin < -negative * lmax || (power < 0 && lmin <= 0.0)) {
       res.curvature = lmin;
       res.status = KrylovStatus::indefinite;
       return res;
     }
-    const VecX sq = eig.eigenvalues().cwiseMax(0.0).cwiseSqrt();
+    VecX sq = eig.eigenvalues().cwiseMax(0.0);
+    for (auto& e : sq) e = power == 0.5 ? std::sqrt(e) : power == -0.5 ? 1.0 / std::sqrt(e) : std::pow(e, power);
     const VecX c = znorm * eig.eigenvectors() * sq.asDiagonal() * eig.eigenvectors().row(0).transpose();
     y.setZero();
     for (int i = 0; i < m; ++i) y += c[i] * V[i];

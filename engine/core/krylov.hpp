@@ -3,9 +3,11 @@
 //
 // conjugate_gradient: solves A x = b for symmetric positive definite A given as a product
 //   (Hestenes & Stiefel 1952), stopping when |r| <= tol |b|.
-// lanczos_sqrt: y = A^{1/2} z by the Lanczos approximation of Chow & Saad (2014, SIAM J. Sci.
-//   Comput. 36, A1092, alg. 2.1): y_k = |z| V_k T_k^{1/2} e_1, stopped when successive iterates
-//   differ by less than tol relative.
+// lanczos_power: y = A^p z (p = 1/2: lanczos_sqrt; p = -1/2: the Brownian force M^{-1/2} z) by
+//   the Lanczos approximation of Chow & Saad (2014, SIAM J. Sci. Comput. 36, A1092, alg. 2.1):
+//   y_k = |z| V_k T_k^p e_1, stopped when successive iterates differ by less than tol relative.
+//   For p < 0 the iteration converges like CG on A (error ~ ((sqrt(k)-1)/(sqrt(k)+1))^m, k the
+//   condition number); a Ritz value <= 0 is reported as indefinite.
 //
 // gmres: restarted GMRES(m) for a general (nonsymmetric) A (Saad & Schultz 1986): the iterate of
 //   least residual norm over the Krylov space, Arnoldi with modified Gram-Schmidt and one
@@ -70,6 +72,9 @@ KrylovResult bicgstab(const LinearOperator& A, const VecX& b, VecX& x, double to
 // Products with A made by a Krylov call: GMRES one per iteration plus one per restart (the true
 // residual), BiCGStab two per iteration.
 
-KrylovResult lanczos_sqrt(const LinearOperator& A, const VecX& z, VecX& y, double tol, int max_iter);
+KrylovResult lanczos_power(const LinearOperator& A, const VecX& z, VecX& y, double power, double tol, int max_iter);
+inline KrylovResult lanczos_sqrt(const LinearOperator& A, const VecX& z, VecX& y, double tol, int max_iter) {
+  return lanczos_power(A, z, y, 0.5, tol, max_iter);
+}
 
 }  // namespace stokesian

@@ -46,6 +46,19 @@ class RandomStream {
     return r;
   }
 
+  // The stream with the same purpose and major index and minor index `minor` (e.g. the near-field
+  // Brownian forces beside the far-field ones of the same step).
+  RandomStream with_minor(std::uint32_t minor) const {
+    return RandomStream(seed_, (stream_ & ~std::uint64_t(0xff)) | (minor & 0xffu));
+  }
+  // Positions the stream so that the next normal() is variate k of the stream (k even): normal
+  // variates 2m and 2m + 1 come from block m (two uniforms of two words each). Lets parallel loops
+  // draw their own slice of one stream, the same numbers for every thread count.
+  void seek_normal(std::uint64_t k) {
+    block_ = k / 2;
+    used_ = 4;
+    have_spare_ = false;
+  }
   // Uniform in the open interval (0, 1), 53 random bits.
   double uniform() {
     if (legacy_) return std::generate_canonical<double, 53>(*legacy_);
