@@ -111,7 +111,10 @@ ResourceEstimate estimate_resources(const Scene& s, const ResolvedModel& model) 
   add_key(model_keys, s, "hydrodynamics", "moments");
   add_key(model_keys, s, "hydrodynamics", "far_field");
 
-  const double evaluations = model.integrator == "midpoint" ? 2 : model.integrator == "rkf45" ? 6 : 1;
+  const double evaluations = model.integrator == "midpoint" ? 2
+                             : model.integrator == "fixman" ? 3
+                             : model.integrator == "rkf45"  ? 6
+                                                            : 1;
   double eval_seconds = 0.1e-6 * N;
 
   e.components.push_back({"scene and particle arrays", kBytesPerParticle * N,
@@ -202,6 +205,12 @@ ResourceEstimate estimate_resources(const Scene& s, const ResolvedModel& model) 
       e.components.push_back({"near-field sparse matrix", (N + 2 * p_nf) * d * d * 28.0,
                               num(p_nf) + " pairs with 2r/(a_i+a_j) < " + num(cut) + ", " + dN,
                               k});
+      if (model.brownian) {
+        // Lanczos basis of the far-field Brownian force M^{-1/2} psi (engine/brownian.hpp): one
+        // vector of d N doubles per iteration, ~100 at most in bench_brownian.
+        e.components.push_back({"Brownian force (Lanczos basis)", 100 * 8.0 * n,
+                                "about 100 vectors of d N doubles, " + dN, model_keys});
+      }
       if (model.solver == "accelerated_sd") {
         // GMRES basis (restart + 1 vectors), the pair blocks' diagonal parts kept during assembly
         // (2 d^2 doubles per pair), the factorised velocity block (~a third of R_nf's entries).

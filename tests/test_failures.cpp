@@ -209,6 +209,24 @@ TEST_CASE("far-field Brownian displacement: an indefinite mobility is reported b
   }
 }
 
+TEST_CASE("far-field Brownian force: an indefinite mobility is reported by the Lanczos inverse square root") {
+  MobilitySolver solver(std::make_unique<IndefiniteMobility>(), 1e-6);
+  const std::vector<Vec3> x{{0, 0, 0}, {4, 0, 0}, {0, 5, 0}};
+  const std::vector<double> a{1, 1, 1};
+  solver.prepare({x, a, Domain{}});
+  Rng rng = RandomStream::for_purpose(1, Purpose::brownian, 0);
+  try {
+    (void)solver.brownian_force(1.0, 0.01, {}, rng);
+    FAIL("no error");
+  } catch (const PhysicsError& e) {
+    const std::string m = e.what();
+    MESSAGE(m);
+    CHECK(contains(m, "M^(-1/2)"));
+    CHECK(contains(m, "not positive definite"));
+    CHECK(contains(m, "iterations"));
+  }
+}
+
 TEST_CASE("far-field FTS solve: CG stagnation names step, iterations, residual and the closest pairs; "
           "at the first evaluation the run stops without a checkpoint") {
   Scene scene = io::parse_scene(R"(
