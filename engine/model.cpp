@@ -264,6 +264,20 @@ ResolvedModel resolve_model(const Scene& s) {
     m.far_field = chosen->name;
     if (m.level == HydroModel::stokesian) {
       const lubrication::NearFieldParams np = lubrication::near_field_params(s.hydro, m.moments);
+      // The near-field pair search is minimum-image: pairs reach centre distance cutoff * a_max,
+      // which must stay within half the smallest box edge (one image per pair).
+      if (s.domain.periodic() && !s.radii.empty()) {
+        const double a_max = *std::max_element(s.radii.begin(), s.radii.end());
+        const double reach = np.cutoff * a_max, half = 0.5 * s.domain.box.minCoeff();
+        if (reach > half) {
+          std::ostringstream o;
+          o << "the lubrication pairs reach centre distance " << reach << " a (cutoff " << np.cutoff
+            << " x largest radius " << a_max << " a), beyond half the smallest box edge (" << half
+            << " a) (allowed: a box edge of at least " << 2 * reach
+            << " a for these radii; enlarge [domain] box or lower lubrication_cutoff)";
+          unavailable(s, "domain", "box", o.str());
+        }
+      }
       std::ostringstream r;
       r << "near field: exact two-sphere resistance minus the two-body far field, ";
       if (np.taper > 0)

@@ -112,6 +112,45 @@ checkpoint_every = 20
                     11);
 }
 
+TEST_CASE("SIGKILL at random moments, then --resume: identical Brownian SD trajectory (sheared, accelerated, FTS)") {
+  // Brownian Stokesian dynamics (fixman: near-field and Lanczos far-field Brownian forces, drift),
+  // bidisperse spheres in a sheared periodic box with PME; the noise streams continue exactly.
+  const std::string scene = R"(
+[fluid]
+kT = 1.0
+[domain]
+kind = "periodic"
+box = [12, 12, 12]
+[particles]
+generate = "random"
+volume_fraction = 0.2
+size_distribution = "bidisperse"
+radius_ratio = 1.4
+large_fraction = 0.3
+seed = 4
+[[forces.pair]]
+kind = "hertz"
+[flow]
+kind = "simple_shear"
+rate = 0.5
+[hydrodynamics]
+model = "stokesian"
+solver = "accelerated"
+tolerance = 1e-3
+[brownian]
+seed = 99
+[time]
+dt = 0.002
+steps = 60
+[output]
+every = 5
+checkpoint_every = 10
+)";
+  check_kill_resume(scene, {"particles/all/position/value", "particles/all/velocity/value",
+                            "particles/all/stresslet/value", "observables/min_gap/value"},
+                    13);
+}
+
 TEST_CASE("SIGKILL at random moments, then --resume: identical adaptive RKF45 trajectory") {
   const std::string scene = R"(
 [particles]

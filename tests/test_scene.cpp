@@ -230,6 +230,11 @@ TEST_CASE("Brownian motion with fixed particles, with stresslets, or with Stokes
   CHECK(sh.moments == Moments::FTS);
   CHECK(sh.integrator == "fixman");
   CHECK(error_of(kTwo + "[fluid]\nkT = 1.0\n[hydrodynamics]\nmodel = \"stokesian\"\n").empty());
+  // A periodic box too small for the near-field pair search is a scene error naming the box.
+  const std::string small = error_of("[domain]\nkind = \"periodic\"\nbox = [7, 7, 7]\n[particles]\npositions = "
+                                     "[[0,0,0],[2.1,0,0]]\n[hydrodynamics]\nmodel = \"stokesian\"\n");
+  CHECK(contains(small, "[domain] box"));
+  CHECK(contains(small, "lubrication pairs reach centre distance 4 a"));
   CHECK(error_of(fixed + "[fluid]\nkT = 0.0\n").empty());
   CHECK(error_of(fixed + "[fluid]\nkT = 0.0\n[hydrodynamics]\nmodel = \"stokesian\"\n").empty());
   CHECK(error_of(fixed + "[fluid]\nkT = 1.0\n[hydrodynamics]\nmodel = \"free_draining\"\n").empty());
