@@ -312,6 +312,34 @@ TEST_CASE("displacement criterion: a closing pair may close a tenth of its gap p
   CHECK(app::displacement_bound(s, {{0.3, 0.0, 0.0}, {0.3, 0.0, 0.0}}).pair_i == -1);
 }
 
+TEST_CASE("displacement criterion in a sheared box: images move with the flow (Lees-Edwards)") {
+  // Two spheres across the y boundary of a sheared box of side 10 (separation r = x_0 - x_1' =
+  // (0.5, 2.2, 0) through the boundary), both moving with the ambient flow u = (y, 0, 0) at their
+  // own centres: the pair separates at r.(G r)/|r| = r_x r_y / |r|. Before the fix the criterion
+  // used U_0 - U_1 = (0.1 - 7.9, 0, 0) and saw it closing at 1.7 a/time.
+  const fs::path p = write_scene("le.toml", R"(
+[domain]
+kind = "periodic"
+box = [10, 10, 10]
+[particles]
+positions = [[5.5, 0.1, 5.0], [5.0, 7.9, 5.0]]
+[flow]
+kind = "simple_shear"
+rate = 1.0
+)");
+  const Scene s = io::load_scene(p.string());
+  std::vector<Vec3> u;
+  for (const Vec3& x : s.positions) u.push_back(Vec3(x.y(), 0.0, 0.0));
+  CHECK(app::displacement_bound(s, u).pair_i == -1);
+  // An approach on top of the flow is still seen: sphere 1 moving at +1 in y towards sphere 0.
+  u[1].y() += 1.0;
+  const app::DisplacementBound d = app::displacement_bound(s, u);
+  CHECK(d.pair_i == 0);
+  const Vec3 r = s.domain.minimum_image(s.positions[0] - s.positions[1]);
+  CHECK(r.y() == doctest::Approx(2.2));
+  CHECK(d.closing_speed == doctest::Approx((r.y() - r.x() * r.y()) / r.norm()).epsilon(1e-9));
+}
+
 TEST_CASE("plot writes one PNG of a short periodic run") {
   const fs::path scene = write_scene(
       "plot.toml",

@@ -257,12 +257,17 @@ StiffnessBound stiffness_bound(const Scene& scene, const ResolvedModel& model) {
 
 DisplacementBound displacement_bound(const Scene& scene, const std::vector<Vec3>& u) {
   DisplacementBound d;
+  const AmbientFlow flow = ambient_flow(scene.flow);
   for (const auto& p : trees::nearest_image_pairs(scene.positions, scene.radii, scene.domain, 1.0)) {
     const std::size_t i = std::size_t(p.i), j = std::size_t(p.j);
     const double h = p.dist - scene.radii[i] - scene.radii[j];
     if (h <= 0 || p.dist <= 0) continue;
-    // d|r_ij|/dt = (U_i - U_j) . r_ij / |r_ij|; a pair closes when it is negative.
-    const double closing = -(u[i] - u[j]).dot(p.r) / p.dist;
+    // d|r_ij|/dt = (U_i - U_j') . r_ij / |r_ij|, j' the image of j nearest to i (r_ij = x_i - x_j'):
+    // in a sheared (Lees-Edwards) box an image moves with the ambient flow at its offset, so
+    // U_j' = U_j + u_inf(x_j' - x_j). A pair closes when this is negative.
+    const Vec3 offset = scene.positions[i] - p.r - scene.positions[j];
+    const Vec3 uj = u[j] + (scene.domain.periodic() ? flow.velocity(offset) : Vec3::Zero());
+    const double closing = -(u[i] - uj).dot(p.r) / p.dist;
     if (closing <= 0) continue;
     const double dt = 0.1 * h / closing;
     if (d.pair_i < 0 || dt < d.dt_max) {
