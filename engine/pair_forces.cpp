@@ -114,6 +114,15 @@ EnergyDerivative HertzLaw::operator()(double r, double ai, double aj) const {
   return {0.4 * stiffness * delta * delta * s, -stiffness * delta * s};
 }
 
+EnergyDerivative HarmonicLaw::operator()(double r, double ai, double aj) const {
+  const double stretch = (r - ai - aj) - rest_gap;
+  return {0.5 * stiffness * stretch * stretch, stiffness * stretch};
+}
+
+double HarmonicLaw::default_cutoff(double, double) const {
+  return rest_gap + std::sqrt(2.0 * kHarmonicCutoffEnergy / stiffness);
+}
+
 MorseLaw morse_law(const PairForceParams& p) {
   if (!(p.morse_kappa > 0.0)) throw std::invalid_argument("morse: kappa must be positive");
   return {p.morse_depth, p.morse_kappa};
@@ -127,6 +136,16 @@ DlvoLaw dlvo_law(const PairForceParams& p) {
 }
 
 HertzLaw hertz_law(const PairForceParams& p) { return {p.hertz_stiffness}; }
+
+HarmonicLaw harmonic_law(const PairForceParams& p) {
+  if (!(p.harmonic_stiffness > 0.0) || !std::isfinite(p.harmonic_stiffness))
+    throw std::invalid_argument("harmonic: stiffness must be positive and finite");
+  if (!(p.harmonic_rest_gap >= 0.0) || !std::isfinite(p.harmonic_rest_gap))
+    throw std::invalid_argument("harmonic: rest_gap must be >= 0 and finite");
+  if (p.cutoff > 0.0 && !(p.cutoff > p.harmonic_rest_gap))
+    throw std::invalid_argument("harmonic: cutoff must exceed rest_gap (the spring's minimum would be cut off)");
+  return {p.harmonic_stiffness, p.harmonic_rest_gap};
+}
 
 // ---------------------------------------------------------------------------------------------
 // Cut-offs

@@ -35,6 +35,13 @@
 //      below h_min) and remains the exact derivative of the energy. Overlap needs a Hertz law as
 //      well ([T] eq. 2.7 pairs DLVO with Hertz contact in the same way).
 //  Hertz: U = (2/5) k_H delta^{5/2}, dU/dr = -k_H delta^{3/2}, delta = a_i + a_j - r > 0, else 0.
+//  Harmonic spring on the gap: U = (k/2) (h - h_0)^2, dU/dr = k (h - h_0), for all h (overlap
+//    included); rest gap h_0 >= 0, so the rest centre distance is a_i + a_j + h_0 for every pair
+//    (polydisperse pairs alike). The law acts on every pair closer than its cut-off (there are no
+//    bonds): a dimer, or well separated groups. Cut and shift as below; the default cut-off is the
+//    stretched gap where the spring holds kHarmonicCutoffEnergy above its minimum,
+//    h_c = h_0 + sqrt(2 E_c / k), so that a thermal pair (Boltzmann weight e^{-E_c/kT}) never
+//    reaches it.
 //
 // Cut-off (cut and shift): U_c(r) = U(r) - U(a_i + a_j + h_c) for h < h_c, 0 beyond; the force is
 // the exact derivative of U_c below h_c and jumps by the (small) force at h_c. Default h_c keeps
@@ -84,10 +91,21 @@ struct HertzLaw {
   double default_cutoff(double, double) const { return 0.0; }  // contact only
 };
 
-// Build the evaluators; throw std::invalid_argument for kappa <= 0 or (DLVO) min_gap <= 0.
+// Energy above the minimum at the harmonic spring's default cut-off [kT].
+constexpr double kHarmonicCutoffEnergy = 100.0;
+
+struct HarmonicLaw {
+  double stiffness, rest_gap;  // k [kT/a^2], h_0 [a]
+  EnergyDerivative operator()(double r, double ai, double aj) const;
+  double default_cutoff(double, double) const;  // h_0 + sqrt(2 kHarmonicCutoffEnergy / k)
+};
+
+// Build the evaluators; throw std::invalid_argument for kappa <= 0, (DLVO) min_gap <= 0,
+// (harmonic) stiffness <= 0, rest_gap < 0, or a positive cutoff not beyond rest_gap.
 MorseLaw morse_law(const PairForceParams& p);
 DlvoLaw dlvo_law(const PairForceParams& p);
 HertzLaw hertz_law(const PairForceParams& p);
+HarmonicLaw harmonic_law(const PairForceParams& p);
 
 // The one dispatch from a law's parameters to its evaluator: f(law) with the law of p.kind.
 template <class F>
@@ -95,6 +113,7 @@ decltype(auto) with_law(const PairForceParams& p, F&& f) {
   switch (p.kind) {
     case PairForceParams::Kind::morse: return f(morse_law(p));
     case PairForceParams::Kind::dlvo: return f(dlvo_law(p));
+    case PairForceParams::Kind::harmonic: return f(harmonic_law(p));
     case PairForceParams::Kind::hertz: break;
   }
   return f(hertz_law(p));

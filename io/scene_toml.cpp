@@ -445,7 +445,7 @@ PairForceParams read_pair(const Reader& R, const toml::table& t, std::size_t ind
   // Unknown keys first (a misspelt `kind` is reported as itself, not as a missing `kind`); keys of
   // another kind are refused below, once the kind is known.
   R.only(t, T, {"kind", "cutoff", "depth", "kappa", "hamaker", "debye_kappa", "surface_potential",
-                "surface_potential_reduced", "born_sigma", "min_gap", "double_layer", "stiffness"});
+                "surface_potential_reduced", "born_sigma", "min_gap", "double_layer", "stiffness", "rest_gap"});
   const std::string kind = R.choice(t, T, "kind", "", name_list<PairForceParams::Kind>());
   if (kind.empty())
     R.fail(&t, "[[forces.pair]] kind", "required (" + quoted_list(name_list<PairForceParams::Kind>()) + ")");
@@ -466,6 +466,17 @@ PairForceParams read_pair(const Reader& R, const toml::table& t, std::size_t ind
     p.born_sigma = R.number(t, T, "born_sigma", p.born_sigma, 0.0, 1.0);
     p.min_gap = R.number(t, T, "min_gap", p.min_gap, 0.0, 1.0, true);
     p.double_layer = R.name(t, T, "double_layer", PairForceParams::DoubleLayer::hhf);
+  } else if (kind == "harmonic") {
+    p.kind = PairForceParams::Kind::harmonic;
+    R.only(t, T, {"kind", "cutoff", "stiffness", "rest_gap"});
+    p.harmonic_stiffness = R.number(t, T, "stiffness", p.harmonic_stiffness, 0.0, 1e12, true);
+    p.harmonic_rest_gap = R.number(t, T, "rest_gap", p.harmonic_rest_gap, 0.0, 1e6);
+    if (p.cutoff > 0.0 && !(p.cutoff > p.harmonic_rest_gap)) {
+      std::ostringstream o;
+      o << "cutoff = " << p.cutoff << " must exceed rest_gap = " << p.harmonic_rest_gap
+        << " (the spring's minimum would be cut off); allowed (rest_gap, 1e6], or 0 for the default";
+      R.fail(R.get(t, T, "cutoff"), R.where(T, "cutoff"), o.str());
+    }
   } else {
     p.kind = PairForceParams::Kind::hertz;
     R.only(t, T, {"kind", "cutoff", "stiffness"});
@@ -839,6 +850,9 @@ std::string resolved_toml(const Scene& s) {
       t.insert("born_sigma", p.born_sigma);
       t.insert("min_gap", p.min_gap);
       t.insert("double_layer", name_of(p.double_layer));
+    } else if (p.kind == PairForceParams::Kind::harmonic) {
+      t.insert("stiffness", p.harmonic_stiffness);
+      t.insert("rest_gap", p.harmonic_rest_gap);
     } else {
       t.insert("stiffness", p.hertz_stiffness);
     }

@@ -1,7 +1,11 @@
 // Pair forces: force = -dU/dr against central differences of the energy for every law and radius
 // ratio; analytic values and limits; the thesis' alumina example in SI units and its secondary
-// minima; Newton's third law, energy gradient and virial of the shared pair loop; thread independence.
+// minima; Newton's third law, energy gradient and virial of the shared pair loop; thread independence;
+// the harmonic spring's energy, default cut-off and scene keys.
 #include "engine/pair_forces.hpp"
+
+#include "engine/core/errors.hpp"
+#include "io/scene_toml.hpp"
 
 #include <doctest/doctest.h>
 #include <omp.h>
@@ -512,4 +516,122 @@ TEST_CASE("Result does not depend on the number of threads") {
   for (std::size_t i = 0; i < F1.size(); ++i) CHECK((F1[i] - F2[i]).norm() == 0.0);
   CHECK(t1.energy == t2.energy);
   CHECK((t1.virial - t2.virial).norm() == 0.0);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Harmonic spring on the gap (kind = "harmonic")
+// ---------------------------------------------------------------------------------------------
+
+namespace {
+
+PairForceParams harmonic_params(double k = 400.0, double h0 = 0.1) {
+  PairForceParams p;
+  p.kind = Kind::harmonic;
+  p.harmonic_stiffness = k;
+  p.harmonic_rest_gap = h0;
+  return p;
+}
+
+}  // namespace
+
+TEST_CASE("Harmonic: dU/dr equals the finite-difference derivative, overlap to cut-off") {
+  const PairForceParams p = harmonic_params();
+  for (double lam : kRatios) {
+    const double ai = 1.0, aj = lam;
+    const double hc = resolved_cutoff(p, std::max(ai, aj));
+    auto f = [&](double r) { return pair_energy(p, hc, r, ai, aj); };
+    for (double h : {-0.3, -0.05, -1e-3, 1e-3, 0.05, 0.1, 0.15, 0.4, hc - 0.01}) {
+      // Quadratic energy: the central difference is exact up to rounding (eps U / d).
+      const double d = 1e-5 * std::max(std::abs(h), 1e-2);
+      const double fd = central_difference(f, ai + aj + h, d);
+      CAPTURE(lam);
+      CAPTURE(h);
+      CHECK(std::abs(f(ai + aj + h).dUdr - fd) <= 1e-6 * p.harmonic_stiffness);
+    }
+  }
+}
+
+TEST_CASE("Harmonic: U = (k/2)(h - h0)^2 shifted at the cut-off; default cut-off where it holds 100 kT") {
+  const double k = 400.0, h0 = 0.1;
+  const PairForceParams p = harmonic_params(k, h0);
+  const double hc = resolved_cutoff(p, 2.0);
+  CHECK(hc == doctest::Approx(h0 + std::sqrt(200.0 / k)).epsilon(1e-15));
+  for (double lam : kRatios) {
+    const double ai = 1.0, aj = lam, r0 = ai + aj + h0;
+    // At rest: no force, energy -100 kT below the shifted zero.
+    CHECK(pair_energy(p, hc, r0, ai, aj).dUdr == doctest::Approx(0.0));
+    CHECK(pair_energy(p, hc, r0, ai, aj).U == doctest::Approx(-kHarmonicCutoffEnergy).epsilon(1e-13));
+    // Stretched and compressed by 0.05: dU/dr = +-k 0.05 = +-20 kT/a (restoring), U = -100 + 0.5.
+    CHECK(pair_energy(p, hc, r0 + 0.05, ai, aj).dUdr == doctest::Approx(20.0).epsilon(1e-12));
+    CHECK(pair_energy(p, hc, r0 - 0.05, ai, aj).dUdr == doctest::Approx(-20.0).epsilon(1e-12));
+    CHECK(pair_energy(p, hc, r0 - 0.05, ai, aj).U == doctest::Approx(-99.5).epsilon(1e-12));
+    // Overlap (h = -0.1): still the same parabola, force k (h - h0) = -80 kT/a.
+    CHECK(pair_energy(p, hc, ai + aj - 0.1, ai, aj).dUdr == doctest::Approx(-80.0).epsilon(1e-12));
+    // At and beyond the cut-off: nothing.
+    CHECK(pair_energy(p, hc, ai + aj + hc, ai, aj).U == 0.0);
+    CHECK(pair_energy(p, hc, ai + aj + hc + 0.1, ai, aj).dUdr == 0.0);
+  }
+  // A given cut-off is used as given.
+  PairForceParams pc = p;
+  pc.cutoff = 0.3;
+  CHECK(resolved_cutoff(pc, 1.0) == 0.3);
+  CHECK(pair_energy(pc, 0.3, 2.0 + h0, 1.0, 1.0).U == doctest::Approx(-0.5 * k * 0.2 * 0.2).epsilon(1e-13));
+}
+
+TEST_CASE("Harmonic: pair loop gives Newton's third law with the force along the line of centres") {
+  const PairForceParams p = harmonic_params(100.0, 0.05);
+  const std::vector<Vec3> x{Vec3(0.1, 0.2, -0.3), Vec3(0.1 + 3.2 * 0.6, 0.2 + 3.2 * 0.8, -0.3)};
+  const std::vector<double> a{1.0, 2.0};
+  std::vector<Vec3> f;
+  PairForceTotals tot;
+  add_pair_forces({p}, x, a, Domain{}, f, &tot);
+  // h = 0.2, stretch 0.15: |F| = 15 kT/a, pulling the spheres together.
+  const Vec3 n = (x[1] - x[0]).normalized();
+  CHECK((f[0] - 15.0 * n).norm() <= 1e-12);
+  CHECK((f[0] + f[1]).norm() <= 1e-12);
+  CHECK(tot.energy == doctest::Approx(0.5 * 100.0 * 0.15 * 0.15 - kHarmonicCutoffEnergy).epsilon(1e-12));
+}
+
+TEST_CASE("Harmonic: bad parameters are refused") {
+  PairForceParams p = harmonic_params();
+  p.harmonic_stiffness = 0.0;
+  CHECK_THROWS_AS(harmonic_law(p), std::invalid_argument);
+  p = harmonic_params();
+  p.harmonic_rest_gap = -0.1;
+  CHECK_THROWS_AS(harmonic_law(p), std::invalid_argument);
+  p = harmonic_params(400.0, 0.1);
+  p.cutoff = 0.1;  // would cut off the minimum
+  CHECK_THROWS_AS(harmonic_law(p), std::invalid_argument);
+}
+
+TEST_CASE("Harmonic: scene keys, defaults and errors naming file, line, key and allowed range") {
+  const std::string two = "[particles]\npositions = [[0,0,0],[3,0,0]]\n[[forces.pair]]\nkind = \"harmonic\"\n";
+  const Scene s = io::parse_scene(two, "h.toml");
+  REQUIRE(s.forces.pair.size() == 1);
+  CHECK(s.forces.pair[0].kind == Kind::harmonic);
+  CHECK(s.forces.pair[0].harmonic_stiffness == 100.0);
+  CHECK(s.forces.pair[0].harmonic_rest_gap == 0.0);
+  const Scene t = io::parse_scene(two + "stiffness = 250\nrest_gap = 0.05\n", "h.toml");
+  CHECK(t.forces.pair[0].harmonic_stiffness == 250.0);
+  CHECK(t.forces.pair[0].harmonic_rest_gap == 0.05);
+  auto error_of = [](const std::string& text) -> std::string {
+    try {
+      io::parse_scene(text, "bad.toml");
+    } catch (const ConfigError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  auto has = [](const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; };
+  std::string e = error_of(two + "stiffness = 0\n");
+  CHECK(has(e, "bad.toml:5: [forces.pair.0] stiffness"));
+  CHECK(has(e, "(0, 1e+12]"));
+  e = error_of(two + "rest_gap = -0.1\n");
+  CHECK(has(e, "bad.toml:5: [forces.pair.0] rest_gap"));
+  CHECK(has(e, "[0, 1e+06]"));
+  e = error_of(two + "rest_gap = 0.2\ncutoff = 0.1\n");
+  CHECK(has(e, "bad.toml:6: [forces.pair.0] cutoff"));
+  CHECK(has(e, "must exceed rest_gap"));
+  e = error_of(two + "depth = 1\n");  // a key of another law
+  CHECK(has(e, "depth"));
 }

@@ -341,6 +341,10 @@ int check(Simulation& sim, const CheckOptions& opt, std::FILE* out) {
       case PairForceParams::Kind::hertz:
         std::fprintf(out, "  pair: hertz, stiffness k_H %.4g kT/a^2.5 (contact only)\n", p.hertz_stiffness);
         break;
+      case PairForceParams::Kind::harmonic:
+        std::fprintf(out, "  pair: harmonic, stiffness %.4g kT/a^2, rest gap %.4g a, cut-off gap %.4g a%s\n",
+                     p.harmonic_stiffness, p.harmonic_rest_gap, hc, how);
+        break;
     }
   }
   if (s.forces.pair.empty()) std::fprintf(out, "  pair: none\n");

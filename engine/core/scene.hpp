@@ -22,7 +22,7 @@ struct FluidParams {
 // One pair-force law. Only the fields of the chosen kind are used (docs/scene.md). The laws and
 // their regularisation are stated in engine/pair_forces.hpp.
 struct PairForceParams {
-  enum class Kind { morse, dlvo, hertz } kind = Kind::morse;
+  enum class Kind { morse, dlvo, hertz, harmonic } kind = Kind::morse;
   double cutoff = 0.0;  // surface-gap cutoff h = r - a_i - a_j beyond which the force is zero [a]; 0 = law's default
                         // (energy shifted to vanish there; default from forces::default_cutoff)
   // Morse (Lee et al. 2024 [L24] eq. 2.17): phi = -V0 [2 exp(-kappa h) - exp(-2 kappa h)]
@@ -46,12 +46,16 @@ struct PairForceParams {
   // Hertz contact: U = (2/5) k_H delta^{5/2}, F = k_H delta^{3/2} along the line of centres for
   // overlap delta = a_i + a_j - r > 0 ([T] eq. 2.7 writes k' delta^{2.5}: k' = (2/5) k_H). [L24], [T]: README.md.
   double hertz_stiffness = 1000.0;  // k_H [kT / a^{5/2}]
+  // Harmonic spring on the surface gap: U = (k/2) (h - h_0)^2 (engine/pair_forces.hpp).
+  double harmonic_stiffness = 100.0;  // k [kT / a^2]
+  double harmonic_rest_gap = 0.0;     // h_0 [a]
 };
 
 template <>
 struct Names<PairForceParams::Kind> {
-  static constexpr NameTable<PairForceParams::Kind, 3> table{
-      {{PairForceParams::Kind::morse, "morse"}, {PairForceParams::Kind::dlvo, "dlvo"}, {PairForceParams::Kind::hertz, "hertz"}}};
+  static constexpr NameTable<PairForceParams::Kind, 4> table{
+      {{PairForceParams::Kind::morse, "morse"}, {PairForceParams::Kind::dlvo, "dlvo"}, {PairForceParams::Kind::hertz, "hertz"},
+       {PairForceParams::Kind::harmonic, "harmonic"}}};
 };
 template <>
 struct Names<PairForceParams::DoubleLayer> {
