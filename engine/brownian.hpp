@@ -27,7 +27,7 @@
 //  - far field, Lanczos rather than a positively split Ewald sampler (Fiore et al. 2017): it works
 //    with every far-field method (direct, Ewald, PME, sheared) through the operator alone, and
 //    needs as many products as a CG solve with M_inf, which is well conditioned.
-// Streams: psi from the step's stream (minor index 0), the pair vectors from minor index 1.
+// Streams: psi from the caller's stream, then the pair vectors from a fork of it (RandomStream::fork).
 #include "engine/core/layout.hpp"
 #include "engine/core/operators.hpp"
 

@@ -61,7 +61,7 @@ class HydroSolver {
   // Brownian force xi at the prepared configuration (engine/brownian.hpp): covariance
   // (2 kT / dt) R restricted to the entries whose force is given (the mobile particles' F, T), zero
   // elsewhere; solved for as force_noise it gives velocities of covariance (2 kT / dt) R_vv^{-1}.
-  // fixed: empty or one flag per particle. Draws from rng (minor index 0) and rng.with_minor(1).
+  // fixed: empty or one flag per particle. Draws from rng and a fork of it (RandomStream::fork).
   virtual VecX brownian_force(double kT, double dt, const std::vector<char>& fixed, Rng& rng) = 0;
   // True when kT div(mobility) does not vanish (any near-field resistance): such a solver needs
   // a drift term from the integrator to sample the right equilibrium.

@@ -110,6 +110,8 @@ class RunStatistics final : public Observer {
   void observe(const State& s, const Evaluation& ev, Frame& f) const override {
     f.set_scalar("pair_energy", ev.pair.energy, units::energy);
     f.set_count("krylov_iterations", std::int64_t(ev.hydro.iterations));
+    // Near-contact policy (docs/brownian.md): how many lubrication pairs sit at the regularised gap.
+    if (ev.hydro.regularised_pairs >= 0) f.set_count("regularised_pairs", std::int64_t(ev.hydro.regularised_pairs));
     f.set_scalar("dt", s.dt, units::time);
   }
 };

@@ -189,6 +189,7 @@ HydroResult AcceleratedStokesianDynamics::solve(const HydroProblem& p) {
   const VecX F = X + Rnf_ * V;
   HydroResult res = unpack_solution(m_, p.flow, V, F, p.fixed);
   res.iterations = kr.iterations;
+  res.regularised_pairs = near_stats_.regularised;
   return res;
 }
 
@@ -206,7 +207,7 @@ VecX AcceleratedStokesianDynamics::brownian_force(double kT, double dt, const st
   stats_.lanczos_iterations = lr.iterations;
   stats_.seconds_far_noise = seconds_since(t0);
   t0 = std::chrono::steady_clock::now();
-  xi += pref * near_.brownian_force(config_.x, config_.a, config_.domain, given, rng.with_minor(1));
+  xi += pref * near_.brownian_force(config_.x, config_.a, config_.domain, given, rng.fork());
   stats_.seconds_near_noise = seconds_since(t0);
   return xi;
 }

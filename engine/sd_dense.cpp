@@ -239,7 +239,9 @@ HydroResult DenseStokesianDynamics::solve(const HydroProblem& p) {
   for (long i = 0; i < nv; ++i) gen[v[std::size_t(i)]] = V[i];
   VecX moments = apply_inverse_mobility(gen) + Rnf_ * gen;  // f + f_B + M^{-1} u_s at given entries
   if (p.slip) moments -= slip_force;
-  return unpack_solution(m_, p.flow, gen, moments, p.fixed);
+  HydroResult res = unpack_solution(m_, p.flow, gen, moments, p.fixed);
+  res.regularised_pairs = stats_.regularised;
+  return res;
 }
 
 std::vector<Vec3> DenseStokesianDynamics::brownian_displacement(double, double, Rng&) {
@@ -254,7 +256,7 @@ VecX DenseStokesianDynamics::brownian_force(double kT, double dt, const std::vec
   VecX psi(n);
   for (auto& v : psi) v = rng.normal();
   const VecX z = L_.triangularView<Eigen::Lower>().transpose().solve(psi);  // L^{-T} psi, factored order
-  VecX xi = near_.brownian_force(config_.x, config_.a, config_.domain, given, rng.with_minor(1));
+  VecX xi = near_.brownian_force(config_.x, config_.a, config_.domain, given, rng.fork());
   const double pref = std::sqrt(2.0 * kT / dt);
   for (long r = 0; r < n; ++r) {
     const long q = perm_[std::size_t(r)];

@@ -19,7 +19,8 @@
 //   near-field twin at the Stokesian-dynamics level), to 1e3 tol (Krylov solves stop at a
 //   relative residual tol; the constrained systems here have condition numbers below 1e2);
 //   loads are reproduced and fixed particles do not move; solvers that sample Brownian motion
-//   give displacements of covariance 2 kT dt M_tt (3000 draws, 12 %); needs_drift is true
+//   give displacements of covariance 2 kT dt M_tt (3000 draws, 12 %; resistance solvers through
+//   their Brownian force, dt R^{-1} xi, M = R^{-1}); needs_drift is true
 //   exactly when a near-field resistance enters.
 #include <doctest/doctest.h>
 
@@ -364,8 +365,19 @@ TEST_CASE("every solver that samples Brownian motion: displacements of covarianc
       Rng rng(61, 0);
       MatX C = MatX::Zero(9, 9);
       const int draws = 3000;
+      FlowSample still;
+      AmbientFlow{}.sample(c.x, still);
+      const std::vector<Vec3> zero(3, Vec3::Zero());
       for (int k = 0; k < draws; ++k) {
-        const auto dx = s->brownian_displacement(kT, dt, rng);
+        // Resistance solvers: displacement dt R^{-1} xi from the Brownian force (engine/brownian.hpp).
+        std::vector<Vec3> dx;
+        if (s->needs_drift()) {
+          const VecX xi = s->brownian_force(kT, dt, {}, rng);
+          dx = s->solve(HydroProblem{{c.x, c.a, c.domain}, {}, still, zero, zero, &xi}).U;
+          for (auto& v : dx) v *= dt;
+        } else {
+          dx = s->brownian_displacement(kT, dt, rng);
+        }
         Eigen::Matrix<double, 9, 1> v;
         for (int i = 0; i < 3; ++i) v.segment<3>(3 * i) = dx[std::size_t(i)];
         C += v * v.transpose();

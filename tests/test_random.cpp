@@ -128,3 +128,28 @@ steps = 50
   // a seed means the same trajectory on every machine.
   CHECK(one[0].x() == doctest::Approx(1.2891609876559402).epsilon(1e-12));
 }
+
+TEST_CASE("fork: a new stream per call, reproducible, independent of the parent's next draws") {
+  RandomStream a = RandomStream::for_purpose(5, Purpose::brownian, 3), b = RandomStream::for_purpose(5, Purpose::brownian, 3);
+  (void)a.normal();
+  (void)b.normal();
+  RandomStream fa1 = a.fork(), fb1 = b.fork();
+  RandomStream fa2 = a.fork();
+  const double x1 = fa1.normal(), y1 = fb1.normal(), x2 = fa2.normal();
+  CHECK(x1 == y1);   // same parent state, same fork
+  CHECK(x1 != x2);   // successive forks differ (the near-field forces of repeated draws)
+  const double parent_next = a.normal(), fork_next = b.fork().normal();
+  CHECK(parent_next != fork_next);  // parent and fork streams differ
+  // Sample correlation between a fork and its parent over 20000 draws: |r| < 4.5 / sqrt(n).
+  RandomStream p = RandomStream::for_purpose(9, Purpose::test, 1);
+  RandomStream c = p.fork();
+  const int n = 20000;
+  double sxy = 0, sxx = 0, syy = 0;
+  for (int k = 0; k < n; ++k) {
+    const double x = p.normal(), y = c.normal();
+    sxy += x * y;
+    sxx += x * x;
+    syy += y * y;
+  }
+  CHECK(std::abs(sxy / std::sqrt(sxx * syy)) < 4.5 / std::sqrt(double(n)));
+}

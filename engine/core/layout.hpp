@@ -36,6 +36,7 @@ struct HydroResult {
   std::vector<Vec5> S;         // stresslets exerted on the fluid (empty below FTS)
   std::vector<Vec3> F, T;      // forces/torques exerted on the fluid (fixed particles: holding force)
   int iterations = 0;          // Krylov iterations of the solve
+  long regularised_pairs = -1; // lubrication pairs evaluated at the regularised minimum gap (-1: no near field)
 };
 
 // Per-particle results from the full generalised motion `relative` = [U - u_inf, Omega - Omega_inf,

@@ -46,10 +46,21 @@ class RandomStream {
     return r;
   }
 
-  // The stream with the same purpose and major index and minor index `minor` (e.g. the near-field
-  // Brownian forces beside the far-field ones of the same step).
-  RandomStream with_minor(std::uint32_t minor) const {
-    return RandomStream(seed_, (stream_ & ~std::uint64_t(0xff)) | (minor & 0xffu));
+  // A new stream, independent of this one and of every purpose stream, whose identity is a hash
+  // of this stream's identity and position; this stream moves on to its next block, so successive
+  // forks differ. Used where a parallel loop needs its own stream (seek_normal) within a draw
+  // (the near-field Brownian forces of one step). Stream ids of forks have purpose byte 0xff.
+  RandomStream fork() {
+    std::uint64_t h;
+    if (legacy_) {
+      h = (*legacy_)();
+    } else {
+      h = mix(stream_ ^ mix(block_ + 0x9e3779b97f4a7c15ull));  // block_: the next block to generate
+      ++block_;  // skipped: the next fork (and the next draw) see another block
+      used_ = 4;
+      have_spare_ = false;
+    }
+    return RandomStream(legacy_ ? 0 : seed_, (std::uint64_t(0xff) << 56) | (h >> 8));
   }
   // Positions the stream so that the next normal() is variate k of the stream (k even): normal
   // variates 2m and 2m + 1 come from block m (two uniforms of two words each). Lets parallel loops
@@ -84,6 +95,12 @@ class RandomStream {
   std::uint64_t below(std::uint64_t n) { return std::uint64_t(uniform() * double(n)) % n; }
 
  private:
+  // splitmix64's finaliser (Steele, Lea & Flood 2014): a bijective 64-bit mix.
+  static std::uint64_t mix(std::uint64_t z) {
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    return z ^ (z >> 31);
+  }
   std::uint32_t word() {
     if (used_ == 4) refill();
     return out_[std::size_t(used_++)];
