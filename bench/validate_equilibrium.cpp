@@ -13,8 +13,10 @@
 // burn-in, the Kolmogorov-Smirnov test against the Boltzmann CDF, and a histogram for the chart.
 //
 // Usage: validate_equilibrium [--quick] [--out DIR] [--dimer-steps N] [--wall-steps N]
-//   default: dimer 2.4e7 steps per scheme (>= 1e5 decorrelated samples), wall 2e6 steps;
-//   --quick: 1e5 / 4e4 steps (a minute). Results DIR/equilibrium.json (quick: equilibrium_quick.json),
+//   [--trajectories T] [--only dimer|wall]
+//   default: dimer T = 2 concurrent trajectories of 1e7 steps with the drift (>= 1e5 decorrelated
+//   samples at tau_int ~ 60 steps), one of 2.5e6 without; wall T trajectories of 1e6 steps each;
+//   --quick: dimer 1e5, wall 4e4 steps. Results DIR/equilibrium.json (quick: equilibrium_quick.json),
 //   chart by bench/plot_equilibrium.py.
 #include "bench/harness.hpp"
 #include "tests/support/equilibrium.hpp"
@@ -41,11 +43,19 @@ struct Run {
   std::vector<double> edges, density, reference;
 };
 
+// A JSON number, or null when not finite (a run with no samples above z_full has no p-value).
+std::string num(double v) {
+  if (!std::isfinite(v)) return "null";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.10g", v);
+  return buf;
+}
+
 std::string json_list(const std::vector<double>& v) {
   std::string s = "[";
   char buf[64];
   for (std::size_t i = 0; i < v.size(); ++i) {
-    std::snprintf(buf, sizeof buf, "%s%.10g", i ? ", " : "", v[i]);
+    std::snprintf(buf, sizeof buf, "%s%s", i ? ", " : "", num(v[i]).c_str());
     s += buf;
   }
   return s + "]";
@@ -197,8 +207,8 @@ int main(int argc, char** argv) {
     const Run& r = runs[i];
     f << "    {\"scene\": \"" << r.scene << "\", \"drift\": " << (r.drift ? "true" : "false") << ", \"steps\": " << r.steps << ", \"trajectories\": " << r.trajectories
       << ", \"dt\": " << r.dt << ", \"burn_in\": " << r.burn << ", \"record_every\": " << r.rec
-      << ", \"tau_int_steps\": " << r.tau_steps << ", \"stride_steps\": " << r.stride << ", \"samples\": " << r.ks.n
-      << ", \"samples_below_z_full\": " << r.below << ", \"ks_D\": " << r.ks.D << ", \"ks_p\": " << r.ks.p
+      << ", \"tau_int_steps\": " << num(r.tau_steps) << ", \"stride_steps\": " << r.stride << ", \"samples\": " << r.ks.n
+      << ", \"samples_below_z_full\": " << r.below << ", \"ks_D\": " << num(r.ks.D) << ", \"ks_p\": " << num(r.ks.p)
       << ", \"seconds\": " << r.seconds << ", \"min_observable\": " << r.min_obs << ",\n     \"edges\": " << json_list(r.edges)
       << ",\n     \"density\": " << json_list(r.density) << ",\n     \"boltzmann\": " << json_list(r.reference) << "}"
       << (i + 1 < runs.size() ? ",\n" : "\n");
