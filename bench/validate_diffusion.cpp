@@ -52,8 +52,8 @@
 //                       seconds_far_field), iterations (GMRES per SD solve)
 //   kind 1 (extrapolated): phi -> D_inf, se_inf, slope (per a/L), se_slope, chi2 (per degree of
 //                       freedom), fit (Abade), rel_err, slope_ladd (-2.837297 mu/eta_inf')
-// Usage: validate_diffusion [--quick] [--out DIR]. Full: phi 0.1 ... 0.45, N = 100, 200, 400, 800
-// with 32, 16, 8, 4 configurations of 2 probes. --quick: phi 0.1 and 0.3, N = 50, 100 (4 and 2
+// Usage: validate_diffusion [--quick] [--out DIR]. Full: phi 0.1 ... 0.45, N = 100, 200, 400, 800,
+// 1600 with 128, 64, 32, 16, 8 configurations of 2 probes (about 10 min on 2 cores). --quick: phi 0.1 and 0.3, N = 50, 100 (4 and 2
 // configurations; under a minute on 2 cores, a smoke run); results self_diffusion_quick.json.
 #include "bench/harness.hpp"
 #include "engine/hydrodynamics.hpp"
@@ -189,15 +189,15 @@ int main(int argc, char** argv) {
   Results res(opt.quick ? "self_diffusion_quick" : "self_diffusion");
   const double tol = 1e-4;
   const std::vector<double> phis = opt.quick ? std::vector<double>{0.1, 0.3} : std::vector<double>{0.1, 0.2, 0.3, 0.4, 0.45};
-  const std::vector<long> sizes = opt.quick ? std::vector<long>{50, 100} : std::vector<long>{100, 200, 400, 800};
-  // Equal particle count per size (configs ~ budget / N, at least 4 (quick: 2) so the spread
+  const std::vector<long> sizes = opt.quick ? std::vector<long>{50, 100} : std::vector<long>{100, 200, 400, 800, 1600};
+  // Equal particle count per size (configs ~ budget / N, at least 8 (quick: 2) so the spread
   // estimates the error).
-  const long budget = opt.quick ? 200 : 3200;
+  const long budget = opt.quick ? 200 : 12800;
   const int probes = 2;
   for (double phi : phis) {
     std::vector<double> x, y, se;
     for (long n : sizes) {
-      const int configs = int(std::max<long>(opt.quick ? 2 : 4, budget / n));
+      const int configs = int(std::max<long>(opt.quick ? 2 : 8, budget / n));
       const Point p = measure(n, phi, configs, probes, 100 * std::uint64_t(n) + std::uint64_t(phi * 1000), tol);
       std::printf("phi %.2f N %4ld L %6.2f configs %2d probes %d: D_s/D0 = %.4f +- %.4f (plain %.4f +- %.4f) (%.1f s: placement %.1f, SD %.1f, "
                   "far field %.1f; %.1f iterations per solve)\n",
