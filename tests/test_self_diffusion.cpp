@@ -18,7 +18,7 @@
 //     D_N/D0 = D_Abade(phi) - 2.837297 (a/L) mu/eta_inf'(phi),
 // eta_inf'/mu = (1 + 1.5 phi g)/(1 - phi g), g = 1 + phi - 0.189 phi^2 (generalised Saito form
 // quoted by Abade et al. 2010; quoted from memory, see the benchmark). The finite-size term here
-// is the published one, not a number fitted to this code; the benchmark's fitted slopes are 6-20 %
+// is the published one, not a number fitted to this code; the benchmark's fitted slopes are 6-25 %
 // smaller in magnitude (-2.03 against -2.17 at phi 0.1, -0.89 against -1.11 at phi 0.3,
 // docs/benchmarks.md), a difference of at most 0.02 at N = 100, inside the model term below.
 // Terms of O((a/L)^3) are below 0.004 at L >= 11 a.
