@@ -312,14 +312,15 @@ TEST_CASE("resume after editing the scene names the changed keys with both value
 TEST_CASE("docs/output.md lists exactly the observables and per-particle elements runs write") {
   TempDir tmp;
   // Two runs between them write every built-in output: a periodic Brownian F-level run
-  // (image) and an FTS far-field run (angular velocity, torque, stresslet, stresslet_sum).
+  // (image) and an FTS Stokesian-dynamics run (angular velocity, torque, stresslet,
+  // stresslet_sum, regularised_pairs).
   const std::string fts = R"([particles]
-positions = [[0,0,0],[3,0,0]]
+positions = [[0,0,0],[2.5,0,0]]
 radius = 1.0
 [forces]
 external_force = [0.0, 0.0, -1.0]
 [hydrodynamics]
-model = "far_field"
+model = "stokesian"
 moments = "FTS"
 [time]
 dt = 0.1

@@ -66,10 +66,14 @@ TEST_CASE("an evaluation as tasks is bit-identical to its phases run serially") 
       // dense SD, pair forces
       "[particles]\ngenerate = \"random\"\ncount = 40\nvolume_fraction = 0.15\nseed = 3\n[forces]\n"
       "external_force = [0, 0, -1]\n[[forces.pair]]\nkind = \"morse\"\n[[forces.pair]]\nkind = \"hertz\"\n",
-      // PME, sheared box, Brownian
+      // PME, sheared box, Brownian SD (pair forces: auto level stokesian; fixman integrator)
       "[domain]\nkind = \"periodic\"\nbox = [14, 14, 14]\n[fluid]\nkT = 1.0\n[particles]\ngenerate = \"random\"\n"
       "count = 150\nseed = 4\n[[forces.pair]]\nkind = \"hertz\"\n[flow]\nkind = \"simple_shear\"\nrate = 0.2\n"
-      "[hydrodynamics]\nmoments = \"FT\"\ntolerance = 1e-5\n[time]\nintegrator = \"midpoint\"\n",
+      "[hydrodynamics]\nmoments = \"FT\"\ntolerance = 1e-5\n",
+      // PME, sheared box, Brownian far field (midpoint)
+      "[domain]\nkind = \"periodic\"\nbox = [14, 14, 14]\n[fluid]\nkT = 1.0\n[particles]\ngenerate = \"random\"\n"
+      "count = 150\nseed = 4\n[[forces.pair]]\nkind = \"hertz\"\n[flow]\nkind = \"simple_shear\"\nrate = 0.2\n"
+      "[hydrodynamics]\nmodel = \"far_field\"\nmoments = \"FT\"\ntolerance = 1e-5\n[time]\nintegrator = \"midpoint\"\n",
       // free draining, many pairs
       "[domain]\nkind = \"periodic\"\nbox = [40, 40, 40]\n[particles]\ngenerate = \"random\"\ncount = 5000\n"
       "seed = 5\n[[forces.pair]]\nkind = \"dlvo\"\n[hydrodynamics]\nmodel = \"free_draining\"\n"};
