@@ -19,7 +19,8 @@
 // Far-field products per Brownian step = lanczos_iterations + products of both solves.
 // Usage: bench_brownian [--quick] [--out DIR]; BENCH_MAX_N caps the sizes (default 10000 full,
 // 1000 quick), BENCH_MIN_N skips smaller sizes, BENCH_STEPS the steps per size (default 2, quick 1),
-// BENCH_TOL the tolerance (1e-3), BENCH_THREADS one thread count, BENCH_NAME the results name.
+// BENCH_TOL the tolerance (1e-3), BENCH_THREADS one thread count, BENCH_NAME the results name,
+// BENCH_NO_ENGINE skips the engine step (large N: one step, parts only).
 // Rows: N, phi, threads, tolerance; phases: seconds per step (means over the steps), products.
 #include "bench/harness.hpp"
 #include "engine/core/flow.hpp"
@@ -138,7 +139,11 @@ StepCost measure(const Scene& scene, int steps) {
     c.drift = c.drift_setup + c.drift_solve;
     c.products_drift = sd.stats().far_field_products;
     c.cpu_step = cpu_now() - cpu - cpu_start;
-    // The same step through the engine (also moves s on).
+    // The same step through the engine (also moves s on); BENCH_NO_ENGINE: skipped (0 recorded).
+    if (std::getenv("BENCH_NO_ENGINE")) {
+      mean.add(c, 1.0 / steps);
+      break;  // one step only: s does not move on
+    }
     cpu = cpu_now();
     t = now();
     const Evaluation ev = sim.evaluate(s, s.position);
