@@ -39,6 +39,12 @@ class Integrator {
   virtual const char* name() const = 0;
   // One step from s (positions, time, dt); `start` is the evaluation at s.position, t = 0.
   virtual StepResult step(const State& s, const Evaluation& start, Dynamics& d, Rng& rng) = 0;
+  // Whether step() reads start.hydro (the deterministic solve at s.position); when it does not,
+  // the run skips that solve on steps that write no frame (the set-up is still done).
+  virtual bool reads_start_solve(bool brownian) const {
+    (void)brownian;
+    return true;
+  }
 };
 
 class EulerIntegrator final : public Integrator {
@@ -56,6 +62,8 @@ class MidpointIntegrator final : public Integrator {
 class FixmanIntegrator final : public Integrator {
  public:
   const char* name() const override { return "fixman"; }
+  // With noise the first stage solves with F + xi itself.
+  bool reads_start_solve(bool brownian) const override { return !brownian; }
   StepResult step(const State& s, const Evaluation& start, Dynamics& d, Rng& rng) override;
 };
 

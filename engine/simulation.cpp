@@ -82,7 +82,7 @@ Evaluation Simulation::evaluate(const State& s, const std::vector<Vec3>& x, doub
 }
 
 Evaluation Simulation::evaluate_checked(const State& s, const std::vector<Vec3>& x, double t, bool diagnostics,
-                                        GapSurvey* overlaps, const VecX* noise) {
+                                        GapSurvey* overlaps, const VecX* noise, bool solve) {
   // Where this evaluation is, for messages: the state of a step, or an integrator stage within it.
   auto at = [&] {
     std::ostringstream o;
@@ -166,7 +166,7 @@ Evaluation Simulation::evaluate_checked(const State& s, const std::vector<Vec3>&
 
   const auto t0 = std::chrono::steady_clock::now();
   try {
-    ev.hydro = hydro_.solve(c, s.fixed, ev.force, ev.torque, noise);
+    if (solve) ev.hydro = hydro_.solve(c, s.fixed, ev.force, ev.torque, noise);
   } catch (const PhysicsError& e) {
     throw PhysicsError(at() + ": " + e.what() + closest_pairs(x, s.radius, domain));
   }
@@ -314,7 +314,10 @@ long Simulation::run(State& s, OutputSink& out, const RunControl& control) {
     GapSurvey overlaps;
     Evaluation ev;
     try {
-      ev = evaluate_checked(s, s.position, 0.0, output_step, &overlaps);
+      // The deterministic solve at the state is needed for its frame, and by integrators that
+      // read it (fixman with noise solves with F + xi itself: one solve per step saved).
+      const bool solve = output_step || integrator_->reads_start_solve(model_.brownian);
+      ev = evaluate_checked(s, s.position, 0.0, output_step, &overlaps, nullptr, solve);
     } catch (const RunStopped&) {
       throw;
     } catch (const PhysicsError& e) {

@@ -83,7 +83,7 @@ class Simulation final : public Dynamics {
   // evaluate(), plus (overlaps != nullptr) the overlapping pairs of x, checked against
   // [run] max_overlap before the solve; every failure is a PhysicsError naming step and particles.
   Evaluation evaluate_checked(const State& s, const std::vector<Vec3>& x, double t, bool diagnostics,
-                              GapSurvey* overlaps, const VecX* noise = nullptr);
+                              GapSurvey* overlaps, const VecX* noise = nullptr, bool solve = true);
   Scene scene_;
   ResolvedModel model_;
   double strain_rate_;  // d(Lees-Edwards strain)/dt of the box
