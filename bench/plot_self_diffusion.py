@@ -104,10 +104,15 @@ for e in extra:
         cells.append(f"{r[0]['phases']['D']:.4f} ± {r[0]['phases']['se']:.4f}" if r else "")
     p = e["phases"]
     pts = sorted([r for r in finite if abs(r["params"]["phi"] - phi) < 1e-9], key=lambda r: r["params"]["N"])[1:]
-    b0, s0 = wfit(np.array([1.0 / r["params"]["L"] for r in pts]), [r["phases"]["D"] for r in pts],
-                  [r["phases"]["se"] for r in pts])
+    # The fit without the smallest box needs two boxes left (the quick form runs only two).
+    if len(pts) >= 2:
+        b0, s0 = wfit(np.array([1.0 / r["params"]["L"] for r in pts]), [r["phases"]["D"] for r in pts],
+                      [r["phases"]["se"] for r in pts])
+        without = f"{b0:.4f} ± {s0:.4f} ({100 * (b0 - p['fit']) / p['fit']:+.1f} %)"
+    else:
+        without = "n/a (fewer than three box sizes)"
     se_scaled = p["se_inf"] * max(1.0, np.sqrt(p["chi2"]))
     print(f"| {phi:g} | " + " | ".join(cells) +
           f" | {p['D_inf']:.4f} ± {se_scaled:.4f} | {p['fit']:.4f} | {100 * p['rel_err']:+.1f} % |"
-          f" {b0:.4f} ± {s0:.4f} ({100 * (b0 - p['fit']) / p['fit']:+.1f} %) |"
+          f" {without} |"
           f" {p['slope']:.2f} ± {p['se_slope']:.2f} | {p['slope_ladd']:.2f} | {p['chi2']:.2f} |")
