@@ -6,21 +6,23 @@
 //          and a Hertz contact, open domain; observable the centre distance r, reference
 //          p(r) ~ r^2 exp(-U(r)).
 //   wall:  a sphere of radius 1 under gravity g = 3 kT/a above a 3 x 3 layer of fixed spheres
-//          (periodic box 6.3 x 6.3 x 8); observable the height z, reference the truncated
-//          exponential above z_full (the whole lateral area accessible).
-// For each scene and scheme: one trajectory, the integrated autocorrelation time tau_int of the
+//          (periodic box 6.3 x 6.3 x 8, hydrodynamic tolerance 1e-3); observable the height z,
+//          reference the whole law p(z) ~ exp(-g z) A(z) with the lateral Boltzmann factor A(z)
+//          of the hollows and soft contacts by quadrature (WallHeightLaw), so every sample counts.
+// For each scene and scheme: trajectories, the integrated autocorrelation time tau_int of the
 // observable (recorded every `rec` steps), samples every stride = ceil(3 tau_int) steps after a
 // burn-in, the Kolmogorov-Smirnov test against the Boltzmann CDF, and a histogram for the chart.
 //
 // Usage: validate_equilibrium [--quick] [--out DIR] [--dimer-steps N] [--wall-steps N]
-//   [--trajectories T] [--only dimer|wall]
+//   [--trajectories T] [--wall-trajectories T] [--only dimer|wall]
 //   default: dimer T = 2 concurrent trajectories of 1e7 steps with the drift (>= 1e5 decorrelated
-//   samples at tau_int ~ 60 steps), one of 2.5e6 without; wall T trajectories of 1e6 steps each;
-//   --quick: dimer 1e5, wall 4e4 steps. Results DIR/equilibrium.json (quick: equilibrium_quick.json),
-//   chart by bench/plot_equilibrium.py.
+//   samples at tau_int ~ 60 steps), one of 2.5e6 without; wall: both schemes concurrently, T = 1
+//   trajectory of 1e6 steps each; --quick: dimer 1e5, wall 4e4 steps. Results DIR/equilibrium.json
+//   (quick: equilibrium_quick.json), chart by bench/plot_equilibrium.py.
 #include "bench/harness.hpp"
 #include "tests/support/equilibrium.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -65,7 +67,7 @@ std::string json_list(const std::vector<double>& v) {
 template <class Obs, class Cdf, class Pdf>
 Run measure(const std::string& scene, const std::string& toml, bool drift, int trajectories, long steps, long burn,
             long rec, Obs obs,
-            Cdf cdf, Pdf pdf, double lo, double hi, bool condition_above_lo) {
+            Cdf cdf, Pdf pdf, double lo, double hi, bool condition_above_lo, double split = -1e300) {
   Run run;
   run.scene = scene;
   run.drift = drift;
@@ -119,6 +121,8 @@ Run measure(const std::string& scene, const std::string& toml, bool drift, int t
       if (v >= lo) y.push_back(v);
     run.below = long(x.size() - y.size());
     x.swap(y);
+  } else {
+    run.below = long(std::count_if(x.begin(), x.end(), [&](double v) { return v < split; }));
   }
   run.ks = eq::ks_test(x, cdf);
   const int bins = 60;
@@ -150,7 +154,7 @@ int main(int argc, char** argv) {
   bool quick = false;
   long dimer_steps = 10000000, wall_steps = 1000000;
   bool do_dimer = true, do_wall = true;
-  int trajectories = 2;
+  int trajectories = 2, wall_trajectories = 1;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--quick") quick = true;
@@ -158,12 +162,13 @@ int main(int argc, char** argv) {
     else if (a == "--dimer-steps" && i + 1 < argc) dimer_steps = std::atol(argv[++i]);
     else if (a == "--wall-steps" && i + 1 < argc) wall_steps = std::atol(argv[++i]);
     else if (a == "--trajectories" && i + 1 < argc) trajectories = std::atoi(argv[++i]);
+    else if (a == "--wall-trajectories" && i + 1 < argc) wall_trajectories = std::atoi(argv[++i]);
     else if (a == "--only" && i + 1 < argc) {
       const std::string w = argv[++i];
       do_dimer = w == "dimer";
       do_wall = w == "wall";
     } else {
-      std::fprintf(stderr, "usage: %s [--quick] [--out DIR] [--dimer-steps N] [--wall-steps N] [--only dimer|wall]\n", argv[0]);
+      std::fprintf(stderr, "usage: %s [--quick] [--out DIR] [--dimer-steps N] [--wall-steps N] [--trajectories T] [--wall-trajectories T] [--only dimer|wall]\n", argv[0]);
       return 1;
     }
   }
@@ -175,21 +180,40 @@ int main(int argc, char** argv) {
   const eq::DimerParams dp;
   const eq::DimerBoltzmann dref(dp);
   const eq::WallParams wp;
-  const eq::WallBoltzmann wref(wp);
-  for (bool drift : {true, false}) {
-    if (do_dimer)
+  const eq::WallHeightLaw wlaw(wp);
+  if (do_dimer)
+    for (bool drift : {true, false})
       runs.push_back(measure(
           "dimer", eq::dimer_toml(dp), drift, drift ? trajectories : 1, drift ? dimer_steps : dimer_steps / 4, 2000, 5,
           [](const State& s) { return (s.position[1] - s.position[0]).norm(); },
           [&](double r) { return dref.cdf(r); }, [&](double r) { return dref.pdf(r); }, dp.a1 + dp.a2 - 0.05,
           dp.a1 + dp.a2 + dp.h0 + 0.15, false));
-    if (do_wall) {
-      const std::size_t m = std::size_t(wp.n * wp.n);  // the mobile sphere
-      runs.push_back(measure(
-          "wall", eq::wall_toml(wp), drift, trajectories, wall_steps, 2000, 5, [m](const State& s) { return s.position[m].z(); },
-          [&](double z) { return wref.cdf(z); }, [&](double z) { return wref.pdf(z); }, wp.z_full(),
-          wp.z_full() + 6.0 / wp.g, true));
-    }
+  if (do_wall) {
+    // Both schemes at once (one thread each, `wall_trajectories` trajectories per scheme); the
+    // whole height law, hollows and soft contacts included (WallHeightLaw), so every sample counts.
+    const std::size_t m = std::size_t(wp.n * wp.n);  // the mobile sphere
+    auto wall = [&](bool drift) {
+      return measure(
+          "wall", eq::wall_toml(wp), drift, wall_trajectories, wall_steps, 2000, 5,
+          [m](const State& s) { return s.position[m].z(); }, [&](double z) { return wlaw.cdf(z); },
+          [&](double z) { return (wlaw.cdf(z + 1e-5) - wlaw.cdf(z - 1e-5)) / 2e-5; }, wlaw.lo() + 0.3,
+          wp.z_full() + 6.0 / wp.g, false, wp.z_full());
+    };
+    Run no_drift;
+    std::thread other([&] { no_drift = wall(false); });
+    runs.push_back(wall(true));
+    other.join();
+    runs.push_back(no_drift);
+    // The reference law itself, checked where no drift is needed: free draining (constant
+    // mobility), Euler-Maruyama, ten times the steps (a step costs ~1 % of a full-SD one).
+    eq::WallParams fp = wp;
+    fp.model = "free_draining";
+    Run fd = measure(
+        "wall", eq::wall_toml(fp), false, 1, 10 * wall_steps, 2000, 5, [m](const State& s) { return s.position[m].z(); },
+        [&](double z) { return wlaw.cdf(z); }, [&](double z) { return (wlaw.cdf(z + 1e-5) - wlaw.cdf(z - 1e-5)) / 2e-5; },
+        wlaw.lo() + 0.3, wp.z_full() + 6.0 / wp.g, false, wp.z_full());
+    fd.scene = "wall_free_draining";
+    runs.push_back(fd);
   }
 
   const auto meta = bench::machine_metadata();
@@ -201,7 +225,8 @@ int main(int argc, char** argv) {
   f << "  },\n  \"dimer\": {\"a1\": " << dp.a1 << ", \"a2\": " << dp.a2 << ", \"k\": " << dp.k << ", \"h0\": " << dp.h0
     << ", \"hertz\": " << dp.hertz << "},\n";
   f << "  \"wall\": {\"n\": " << wp.n << ", \"spacing\": " << wp.spacing << ", \"Lz\": " << wp.Lz << ", \"zw\": " << wp.zw
-    << ", \"g\": " << wp.g << ", \"z_full\": " << wp.z_full() << ", \"z_max\": " << wp.z_max() << "},\n";
+    << ", \"g\": " << wp.g << ", \"z_full\": " << wp.z_full() << ", \"z_max\": " << wp.z_max()
+    << ", \"tolerance\": " << wp.tolerance << ", \"boltzmann_below_z_full\": " << wlaw.below_z_full() << "},\n";
   f << "  \"runs\": [\n";
   for (std::size_t i = 0; i < runs.size(); ++i) {
     const Run& r = runs[i];
