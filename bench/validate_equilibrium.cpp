@@ -16,8 +16,8 @@
 // Usage: validate_equilibrium [--quick] [--out DIR] [--dimer-steps N] [--wall-steps N]
 //   [--trajectories T] [--wall-trajectories T] [--only dimer|wall]
 //   default: dimer T = 2 concurrent trajectories of 1e7 steps with the drift (>= 1e5 decorrelated
-//   samples at tau_int ~ 60 steps), one of 2.5e6 without; wall: both schemes concurrently, T = 1
-//   trajectory of 1e6 steps each; --quick: dimer 1e5, wall 4e4 steps. Results DIR/equilibrium.json
+//   samples at tau_int ~ 60 steps), one of 2.5e6 without; wall: both schemes concurrently, T = 2
+//   trajectories of 1e6 steps with the drift, one without; --quick: dimer 1e5, wall 4e4 steps. Results DIR/equilibrium.json
 //   (quick: equilibrium_quick.json), chart by bench/plot_equilibrium.py.
 #include "bench/harness.hpp"
 #include "tests/support/equilibrium.hpp"
@@ -154,7 +154,7 @@ int main(int argc, char** argv) {
   bool quick = false;
   long dimer_steps = 10000000, wall_steps = 1000000;
   bool do_dimer = true, do_wall = true;
-  int trajectories = 2, wall_trajectories = 1;
+  int trajectories = 2, wall_trajectories = 2;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--quick") quick = true;
@@ -189,12 +189,12 @@ int main(int argc, char** argv) {
           [&](double r) { return dref.cdf(r); }, [&](double r) { return dref.pdf(r); }, dp.a1 + dp.a2 - 0.05,
           dp.a1 + dp.a2 + dp.h0 + 0.15, false));
   if (do_wall) {
-    // Both schemes at once (one thread each, `wall_trajectories` trajectories per scheme); the
+    // Both schemes at once (`wall_trajectories` threads with the drift, one without); the
     // whole height law, hollows and soft contacts included (WallHeightLaw), so every sample counts.
     const std::size_t m = std::size_t(wp.n * wp.n);  // the mobile sphere
     auto wall = [&](bool drift) {
       return measure(
-          "wall", eq::wall_toml(wp), drift, wall_trajectories, wall_steps, 2000, 5,
+          "wall", eq::wall_toml(wp), drift, drift ? wall_trajectories : 1, wall_steps, 2000, 5,
           [m](const State& s) { return s.position[m].z(); }, [&](double z) { return wlaw.cdf(z); },
           [&](double z) { return (wlaw.cdf(z + 1e-5) - wlaw.cdf(z - 1e-5)) / 2e-5; }, wlaw.lo() + 0.3,
           wp.z_full() + 6.0 / wp.g, false, wp.z_full());
