@@ -205,11 +205,11 @@ int main(int argc, char** argv) {
     other.join();
     runs.push_back(no_drift);
     // The reference law itself, checked where no drift is needed: free draining (constant
-    // mobility), Euler-Maruyama, ten times the steps (a step costs ~1 % of a full-SD one).
+    // mobility), Euler-Maruyama, 50 times the steps (a step costs ~0.2 % of a full-SD one).
     eq::WallParams fp = wp;
     fp.model = "free_draining";
     Run fd = measure(
-        "wall", eq::wall_toml(fp), false, 1, 10 * wall_steps, 2000, 5, [m](const State& s) { return s.position[m].z(); },
+        "wall", eq::wall_toml(fp), false, 1, 50 * wall_steps, 2000, 5, [m](const State& s) { return s.position[m].z(); },
         [&](double z) { return wlaw.cdf(z); }, [&](double z) { return (wlaw.cdf(z + 1e-5) - wlaw.cdf(z - 1e-5)) / 2e-5; },
         wlaw.lo() + 0.3, wp.z_full() + 6.0 / wp.g, false, wp.z_full());
     fd.scene = "wall_free_draining";
