@@ -969,4 +969,81 @@ Snapshot read_last_frame(const std::string& path) {
   return s;
 }
 
+void write_table_h5(const std::string& path, const std::vector<TableColumn>& columns,
+                    const std::vector<std::pair<std::string, std::string>>& attributes) {
+  quiet_hdf5();
+  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
+  {
+    H f = checked(H5Fcreate(tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose, tmp, "cannot create file");
+    H g = make_group(f, "table", tmp);
+    std::vector<std::string> names;
+    for (const auto& c : columns) {
+      std::string name = c.name;
+      std::replace(name.begin(), name.end(), '/', '|');
+      names.push_back(name);
+      if (c.numeric) {
+        const hsize_t n = c.num.size();
+        H space = checked(H5Screate_simple(1, &n, nullptr), H5Sclose, tmp, "dataspace");
+        H d = checked(H5Dcreate2(g, name.c_str(), H5T_IEEE_F64LE, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose,
+                      tmp, "cannot create dataset " + name);
+        if (n) checked(H5Dwrite(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, c.num.data()), tmp, "cannot write " + name);
+      } else {
+        std::size_t len = 0;
+        for (const auto& t : c.text) len = std::max(len, t.size());
+        H type = string_type(len, tmp);
+        const std::size_t width = len + 1;
+        std::vector<char> buf(width * c.text.size(), '\0');
+        for (std::size_t i = 0; i < c.text.size(); ++i) std::memcpy(buf.data() + i * width, c.text[i].data(), c.text[i].size());
+        const hsize_t n = c.text.size();
+        H space = checked(H5Screate_simple(1, &n, nullptr), H5Sclose, tmp, "dataspace");
+        H d = checked(H5Dcreate2(g, name.c_str(), type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose, tmp,
+                      "cannot create dataset " + name);
+        if (n) checked(H5Dwrite(d, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf.data()), tmp, "cannot write " + name);
+      }
+    }
+    {
+      std::size_t len = 0;
+      for (const auto& t : names) len = std::max(len, t.size());
+      H type = string_type(len, tmp);
+      const std::size_t width = len + 1;
+      std::vector<char> buf(width * names.size(), '\0');
+      for (std::size_t i = 0; i < names.size(); ++i) std::memcpy(buf.data() + i * width, names[i].data(), names[i].size());
+      const hsize_t n = names.size();
+      H space = checked(H5Screate_simple(1, &n, nullptr), H5Sclose, tmp, "dataspace");
+      H d = checked(H5Dcreate2(f, "table_columns", type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose, tmp,
+                    "cannot create dataset table_columns");
+      if (n) checked(H5Dwrite(d, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf.data()), tmp, "cannot write table_columns");
+    }
+    for (const auto& [k, v] : attributes) write_attr_strings(f, k, {v}, true, tmp);
+    f.close(tmp);
+  }
+  detail::durable_rename(tmp, path);
+}
+
+std::vector<ObservableSeries> read_observables(const std::string& path) {
+  const TrajectoryInfo info = inspect_trajectory(path);  // full consistency check first
+  H f = open_file(path, H5F_ACC_RDONLY);
+  std::vector<ObservableSeries> out;
+  for (const auto& name : info.observables) {
+    ObservableSeries o;
+    o.name = name;
+    const std::string g = "/observables/" + name;
+    o.time = read_vector<double>(f, g + "/time", H5T_NATIVE_DOUBLE, path);
+    H d = open_dataset(f, g + "/value", path);
+    const auto dims = dims_of(d, path);
+    if (dims.empty() || dims[0] != o.time.size()) throw IoError(path + ": " + g + "/value does not match its time");
+    for (std::size_t k = 1; k < dims.size(); ++k) o.components *= dims[k];
+    o.value.assign(o.time.size() * o.components, 0.0);
+    if (!o.value.empty())
+      checked(H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, o.value.data()), path, "cannot read " + g + "/value");
+    if (H5Aexists(d, "unit") > 0) {
+      H a = open_attr(d, "unit", g + "/value", path);
+      const auto u = read_strings(a, true, "unit", path);
+      if (!u.empty()) o.unit = u[0];
+    }
+    out.push_back(std::move(o));
+  }
+  return out;
+}
+
 }  // namespace stokesian::io

@@ -111,6 +111,29 @@ struct Snapshot {
 };
 Snapshot read_last_frame(const std::string& path);
 
+// Every observable of a trajectory (/observables/<name>), whole: its times and values, each value
+// flattened to `components` numbers (integer observables converted to double). For summaries.
+struct ObservableSeries {
+  std::string name, unit;
+  std::vector<double> time;
+  std::size_t components = 1;
+  std::vector<double> value;  // time.size() x components, row-major
+};
+std::vector<ObservableSeries> read_observables(const std::string& path);
+
+// A table of named columns (numbers or strings) written as HDF5: /table/<column> datasets in
+// column order (the string dataset /table_columns lists them), plus string attributes on the root.
+// Written to path + ".tmp" and renamed, so a reader never sees a partial file. '/' in a column
+// name is stored as '|'.
+struct TableColumn {
+  std::string name;
+  bool numeric = true;
+  std::vector<double> num;
+  std::vector<std::string> text;
+};
+void write_table_h5(const std::string& path, const std::vector<TableColumn>& columns,
+                    const std::vector<std::pair<std::string, std::string>>& attributes);
+
 namespace detail {
 // Durable file operations shared by the trajectory and checkpoint writers.
 void fsync_file(const std::string& path);

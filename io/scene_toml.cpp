@@ -38,7 +38,8 @@ class Reader {
 
   [[noreturn]] void fail(const toml::node* node, const std::string& where, const std::string& msg) const {
     std::ostringstream o;
-    o << source_;
+    // A node parsed from another file (a value a sweep file put into this scene) names that file.
+    o << (node && node->source().path && !node->source().path->empty() ? *node->source().path : source_);
     if (node && node->source().begin.line) o << ":" << node->source().begin.line;
     o << ": " << where << ": " << msg;
     throw ConfigError(o.str());

@@ -2,6 +2,7 @@
 
 #include "engine/app/check.hpp"
 #include "engine/app/run.hpp"
+#include "engine/app/sweep.hpp"
 #include "engine/core/errors.hpp"
 #include "engine/progress.hpp"
 #include "engine/resources.hpp"
@@ -263,6 +264,26 @@ int main_cli(int argc, char** argv) {
       ->type_name("PATH")
       ->default_str("/usr/bin/python3");
 
+  CLI::App* sweep_cmd = app.add_subcommand(
+      "sweep", "Run a sweep file: one run per expanded scene, J at a time, resumable; summary table (docs/sweeps.md)");
+  std::string sweep_file, jobs_text = "1", sweep_threads_text = "1", run_text;
+  SweepOptions sweep_opt;
+  sweep_cmd->add_option("sweep", sweep_file, "Sweep file (TOML; docs/sweeps.md)")->required()->type_name("SWEEP.toml");
+  sweep_cmd->add_option("--out", sweep_opt.out, "Folder of the sweep's runs and summary")->required()->type_name("DIR");
+  sweep_cmd->add_option("--jobs", jobs_text, "Runs at a time, an integer from 1 to 1024")
+      ->check(integer_in(1, 1024))
+      ->type_name("INT");
+  sweep_cmd->add_option("--threads", sweep_threads_text, "OpenMP threads per run, an integer from 1 to 1024")
+      ->check(integer_in(1, kMaxThreads))
+      ->type_name("INT");
+  sweep_cmd->add_option("--run", run_text, "Run only this run (its index, from 0), no summary (what each Slurm array task calls)")
+      ->check(integer_in(0, 99999))
+      ->type_name("INT");
+  sweep_cmd->add_flag("--slurm", sweep_opt.slurm, "Write DIR/sweep.sbatch (a Slurm job array, one task per run) instead of running");
+  sweep_cmd->add_flag("--summary", sweep_opt.summary_only, "Only (re)write DIR/summary.csv and summary.h5 from the runs' files");
+  sweep_cmd->add_flag("--retry-failed", sweep_opt.retry_failed, "Run failed runs again (resuming from their checkpoints)");
+  sweep_cmd->add_flag("--quiet", sweep_opt.quiet, "No progress lines");
+
   // A first word that is neither an option nor a command: name it (CLI11 would only say that a
   // command is required).
   const auto is_command = [&](const char* w) {
@@ -271,7 +292,7 @@ int main_cli(int argc, char** argv) {
     return false;
   };
   if (argc > 1 && argv[1][0] != '-' && !is_command(argv[1])) {
-    std::fprintf(stderr, "stokesian: unknown command \"%s\"; commands: run, solve, check, plot\n%s", argv[1],
+    std::fprintf(stderr, "stokesian: unknown command \"%s\"; commands: run, solve, check, plot, sweep\n%s", argv[1],
                  "Run `stokesian --help` for usage.\n");
     return 1;
   }
@@ -287,6 +308,14 @@ int main_cli(int argc, char** argv) {
   if (threads > 0) omp_set_num_threads(threads);
 
   if (plot_cmd->parsed()) return plot(traj, out, python, std::stol(frame_text), projection);
+  if (sweep_cmd->parsed()) {
+    sweep_opt.jobs = std::stoi(jobs_text);
+    sweep_opt.threads = std::stoi(sweep_threads_text);
+    if (!run_text.empty()) sweep_opt.only_run = std::stol(run_text);
+    Activity activity;
+    activity.doing = "running a sweep";
+    return guarded(activity, [&]() -> int { return app::sweep(sweep_file, sweep_opt); });
+  }
   if (out.empty()) out = default_out(scene);
 
   Activity activity;
