@@ -184,7 +184,7 @@ Sweep parse_sweep(const std::string& text, const std::string& path) {
   Sweep sw;
   sw.path = path;
   const toml::table root = parse_toml(text, path);
-  only(path, root, "top level", {"base", "grid", "zip", "replicas", "summary", "slurm"});
+  only(path, root, "top level", {"base", "set", "grid", "zip", "replicas", "summary", "slurm"});
 
   const toml::node* bn = root.get("base");
   if (!bn || !bn->is_string()) fail(path, bn ? bn : nullptr, "base: required, a string (the base scene's path, relative to the sweep file)");
@@ -247,6 +247,19 @@ Sweep parse_sweep(const std::string& text, const std::string& path) {
     }
   }
   for (const auto& f : factors) sw.columns.insert(sw.columns.end(), f.keys.begin(), f.keys.end());
+  // [set]: keys given one value for every run (not columns of the summary).
+  std::vector<std::string> set_keys;
+  if (const toml::node* sn = root.get("set")) {
+    const toml::table* st = sn->as_table();
+    if (!st) fail(path, sn, "[set]: expected a table of \"dotted.scene.key\" = value");
+    for (auto&& [k, v] : *st) {
+      const std::string key(k.str());
+      if (v.is_table())
+        fail(path, &v, "[set] " + key + ": a table; write each scene key quoted and whole, e.g. \"time.steps\" = 1000");
+      add_key(key, &v);
+      set_keys.push_back(key);
+    }
+  }
 
   if (const toml::node* rn = root.get("replicas")) {
     const toml::table* rt = rn->as_table();
@@ -335,6 +348,10 @@ Sweep parse_sweep(const std::string& text, const std::string& path) {
     // Fresh parses, so that the moved value nodes keep their file and line for error messages.
     toml::table scene = parse_toml(base_text, base);
     toml::table fresh = parse_toml(text, path);
+    for (const auto& key : set_keys) {
+      toml::node* v = fresh.get_as<toml::table>("set")->get(key);
+      set_key(scene, key, std::move(*v), path, v);
+    }
     std::string label;
     for (std::size_t f = 0; f < factors.size(); ++f)
       for (std::size_t k = 0; k < factors[f].keys.size(); ++k) {

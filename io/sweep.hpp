@@ -3,6 +3,7 @@
 // Every key, its type, unit and default is documented in docs/sweeps.md.
 //
 //   base = "scene.toml"                     # relative to the sweep file
+//   [set]      "time.steps" = 1000          # keys set alike in every run
 //   [[grid]]   key = "fluid.kT"   values = [0.5, 1.0]            # cartesian product of the grids
 //   [[zip]]    keys = ["time.dt", "time.steps"]                   # one factor: lists taken together
 //              values = [[0.01, 100], [0.02, 50]]

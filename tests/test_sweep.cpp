@@ -2,6 +2,7 @@
 // and rejection of malformed sweeps before anything runs, naming file, line and key.
 #include "engine/core/errors.hpp"
 #include "io/scene_toml.hpp"
+#include "engine/simulation.hpp"
 #include "io/sweep.hpp"
 
 #include <doctest/doctest.h>
@@ -162,4 +163,52 @@ TEST_CASE("sweep: malformed sweeps are rejected with file, line and key") {
     REQUIRE(!msg.empty());
     for (const auto& e : c.expect) CHECK(msg.find(e) != std::string::npos);
   }
+}
+
+TEST_CASE("sweep: [set] keys apply to every run and are not columns") {
+  Dir d;
+  const std::string p = d.write("s.toml", R"(base = "base.toml"
+[set]
+"time.steps" = 4
+"output.every" = 2
+[[grid]]
+key = "fluid.kT"
+values = [0.5, 2.0]
+)");
+  const io::Sweep sw = io::load_sweep(p);
+  REQUIRE(sw.runs.size() == 2);
+  CHECK(sw.columns == std::vector<std::string>{"fluid.kT"});
+  for (const auto& r : sw.runs) {
+    const Scene s = io::parse_scene(r.scene, "r");
+    CHECK(s.time.steps == 4);
+    CHECK(s.output.every == 2);
+  }
+  CHECK(io::parse_scene(sw.runs[1].scene, "r").fluid.kT == 2.0);
+  d.write("s.toml", "base = \"base.toml\"\n[set]\ntime.steps = 4\n");
+  const std::string msg = error_of(p);
+  CHECK(msg.find(p + ":3:") != std::string::npos);
+  CHECK(msg.find("quoted") != std::string::npos);
+  d.write("s.toml", "base = \"base.toml\"\n[set]\n\"time.stepz\" = 4\n");
+  CHECK(error_of(p).find(p + ":3: [time] stepz: unknown key") != std::string::npos);
+}
+
+// Every example sweep in configs/sweeps/ expands to valid scenes, and the first run of each takes a
+// few steps and stays finite.
+TEST_CASE("example sweeps in configs/sweeps/ are valid and their runs start") {
+  int count = 0;
+  for (const auto& e : fs::directory_iterator(std::string(STOKESIAN_SOURCE_DIR) + "/configs/sweeps")) {
+    if (e.path().extension() != ".toml") continue;
+    CAPTURE(e.path().string());
+    const io::Sweep sw = io::load_sweep(e.path().string());
+    CHECK(sw.runs.size() >= 2);
+    Simulation sim(io::parse_scene(sw.runs.front().scene, sw.base));
+    State s = sim.initial_state();
+    for (int k = 0; k < 5; ++k) {
+      const Evaluation ev = sim.evaluate(s, s.position);
+      sim.advance(s, ev);
+    }
+    for (const Vec3& x : s.position) CHECK(x.allFinite());
+    ++count;
+  }
+  CHECK(count >= 1);
 }

@@ -4,8 +4,8 @@
 // and the summary table (apart from the wall-time and attempt columns, which measure the
 // interruptions) equal an uninterrupted sweep's. Also: a failing run is recorded and the others
 // finish; exit status 6.
-#include "support/child_process.hpp"
 #include "support/h5_compare.hpp"
+#include "support/sweep_support.hpp"
 
 #include <doctest/doctest.h>
 
@@ -57,61 +57,13 @@ count = 3
 window = [0.25, 1.0]
 )";
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-// The CSV without the columns that time the runs.
-std::string summary_without_timing(const fs::path& csv) {
-  std::istringstream in(slurp(csv));
-  std::string line, out;
-  std::vector<bool> keep;
-  bool header = true;
-  while (std::getline(in, line)) {
-    std::vector<std::string> f;
-    std::string cell;
-    std::istringstream ls(line);
-    while (std::getline(ls, cell, ',')) f.push_back(cell);
-    if (header) {
-      for (const auto& c : f) keep.push_back(c != "wall_seconds" && c != "attempts");
-      header = false;
-    }
-    for (std::size_t k = 0; k < f.size(); ++k)
-      if (k < keep.size() && keep[k]) out += f[k] + ",";
-    out += "\n";
-  }
-  return out;
-}
-
-struct Work {
-  fs::path dir;
-  Work() {
-    dir = fs::temp_directory_path() / ("stokesian_sweep_kill_" + std::to_string(::getpid()));
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-    std::ofstream(dir / "base.toml") << kBase;
-    std::ofstream(dir / "sweep.toml") << kSweep;
-  }
-  ~Work() { fs::remove_all(dir); }
-};
-
-ChildOutcome sweep(const fs::path& sweep_file, const fs::path& out, double kill_ms = -1, const std::string& extra = "") {
-  std::vector<std::string> args{STOKESIAN_BINARY, "sweep", sweep_file.string(), "--out", out.string(), "--jobs", "2",
-                                "--quiet"};
-  if (!extra.empty()) args.push_back(extra);
-  return run_child(args, kill_ms, "", (out.string() + ".stderr"), 600000.0);
-}
-
 }  // namespace
 
 TEST_CASE("sweep: killed at seeded moments and resumed, identical to an uninterrupted sweep") {
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
-  Work w;
+  SweepWork w("sweep_kill", kBase, kSweep);
   const fs::path ref = w.dir / "ref", got = w.dir / "killed";
-  const ChildOutcome r = sweep(w.dir / "sweep.toml", ref);
+  const ChildOutcome r = run_sweep(w.dir / "sweep.toml", ref);
   INFO(slurp(ref.string() + ".stderr"));
   REQUIRE(!r.killed);
   REQUIRE(r.status == 0);
@@ -124,7 +76,7 @@ TEST_CASE("sweep: killed at seeded moments and resumed, identical to an uninterr
   for (; invocations < 40; ++invocations) {
     // Five kills at uniform moments within the remaining work, then let it finish.
     const double at = kills < 5 ? (u(rng) < 0.25 ? 300.0 * u(rng) : 0.5 * T * u(rng)) : -1.0;
-    const ChildOutcome o = sweep(w.dir / "sweep.toml", got, at);
+    const ChildOutcome o = run_sweep(w.dir / "sweep.toml", got, at);
     if (o.killed) {
       ++kills;
       continue;
@@ -155,20 +107,30 @@ TEST_CASE("sweep: killed at seeded moments and resumed, identical to an uninterr
   CHECK(slurp(ref / "run_0000" / "trajectory.h5") != slurp(ref / "run_0001" / "trajectory.h5"));
   CHECK(slurp(ref / "run_0011" / "scene.toml").find("kT = 1") != std::string::npos);
 
+  // The chart of the table (tools/stokesian_sweep_plot.py through `stokesian plot`).
+  const ChildOutcome png = run_child({STOKESIAN_BINARY, "plot", ref.string(), "--y", "pair_energy", "--series", "fluid.kT"},
+                                     -1, "", (w.dir / "plot.err").string(), 120000.0);
+  INFO(slurp(w.dir / "plot.err"));
+  CHECK(png.status == 0);
+  CHECK(fs::file_size(ref / "pair_energy.png") > 10000);
+  CHECK(run_child({STOKESIAN_BINARY, "plot", ref.string(), "--y", "no_such_observable"}, -1, "", (w.dir / "plot.err").string(),
+                  120000.0).status == 1);
+  CHECK(slurp(w.dir / "plot.err").find("no_such_observable") != std::string::npos);
+
   // A second call on a finished sweep runs nothing and rewrites the same summary.
   const std::string before = summary_without_timing(got / "summary.csv");
-  const ChildOutcome again = sweep(w.dir / "sweep.toml", got);
+  const ChildOutcome again = run_sweep(w.dir / "sweep.toml", got);
   CHECK(again.status == 0);
   CHECK(summary_without_timing(got / "summary.csv") == before);
 }
 
 TEST_CASE("sweep: a failing run is recorded, the others finish, exit status 6") {
-  Work w;
+  SweepWork w("sweep_fail", kBase, kSweep);
   // dt so large that the contact force blows the dense replica up: overlap beyond max_overlap.
   std::ofstream(w.dir / "fail.toml") << "base = \"base.toml\"\n[[grid]]\nkey = \"time.dt\"\nvalues = [0.002, 5.0]\n"
                                      << "[[grid]]\nkey = \"particles.volume_fraction\"\nvalues = [0.3]\n";
   const fs::path out = w.dir / "fail";
-  const ChildOutcome o = sweep(w.dir / "fail.toml", out);
+  const ChildOutcome o = run_sweep(w.dir / "fail.toml", out);
   INFO(slurp(out.string() + ".stderr"));
   CHECK(o.status == 6);
   CHECK(slurp(out / "run_0000" / "status").find("status = done") == 0);
@@ -181,8 +143,8 @@ TEST_CASE("sweep: a failing run is recorded, the others finish, exit status 6") 
   CHECK(csv.find(",failed,3,") != std::string::npos);
   // Without --retry-failed a second call does not run it again; with it, it does (and fails again).
   const std::string attempts = slurp(out / "run_0001" / "attempts");
-  CHECK(sweep(w.dir / "fail.toml", out).status == 6);
+  CHECK(run_sweep(w.dir / "fail.toml", out).status == 6);
   CHECK(slurp(out / "run_0001" / "attempts") == attempts);
-  CHECK(sweep(w.dir / "fail.toml", out, -1, "--retry-failed").status == 6);
+  CHECK(run_sweep(w.dir / "fail.toml", out, -1, {"--retry-failed"}).status == 6);
   CHECK(slurp(out / "run_0001" / "status").find("attempts = 2") != std::string::npos);
 }

@@ -121,27 +121,57 @@ int guarded(const Activity& activity, F&& f) {
   }
 }
 
-int plot(const std::string& traj, std::string png, const std::string& python_opt, long frame,
-         const std::string& projection) {
+// What `plot` charts: a trajectory, or a sweep's summary table (its folder or summary.csv).
+struct PlotRequest {
+  std::string input, png, python;
+  long frame = -1;
+  std::string projection = "xy";
+  std::string x, y, series;  // sweep tables
+};
+
+int plot(const PlotRequest& req) {
+  const std::string& traj = req.input;
   if (!fs::exists(traj)) {
     std::fprintf(stderr, "stokesian: file error: %s: no such file\n", traj.c_str());
     return 4;
   }
+  const bool table = fs::is_directory(traj) || fs::path(traj).extension() == ".csv";
+  if (table && req.y.empty()) {
+    std::fprintf(stderr, "stokesian: plot %s: a sweep's table needs --y OBSERVABLE (docs/sweeps.md)\n", traj.c_str());
+    return 1;
+  }
+  if (!table && !(req.x.empty() && req.y.empty() && req.series.empty())) {
+    std::fprintf(stderr, "stokesian: plot %s: --x, --y and --series chart a sweep's table (a folder or summary.csv)\n",
+                 traj.c_str());
+    return 1;
+  }
+  const std::string name = table ? "stokesian_sweep_plot.py" : "stokesian_plot.py";
   std::vector<std::string> searched;
-  const std::string script = find_plot_script(&searched);
+  const std::string script = find_plot_script(&searched, name);
   if (script.empty()) {
     std::string where;
     for (const auto& s : searched) where += "\n  " + s;
-    std::fprintf(stderr, "stokesian: file error: the plot script stokesian_plot.py was not found; looked in:%s\n",
+    std::fprintf(stderr, "stokesian: file error: the plot script %s was not found; looked in:%s\n", name.c_str(),
                  where.c_str());
     return 4;
   }
-  if (png.empty()) png = fs::path(traj).replace_extension(".png").string();
+  std::string png = req.png;
+  if (png.empty())
+    png = table ? ((fs::is_directory(traj) ? fs::path(traj) : fs::path(traj).parent_path()) / (req.y + ".png")).string()
+                : fs::path(traj).replace_extension(".png").string();
   // Interpreter: --python, else /usr/bin/python3, else python3 on PATH.
-  std::string python = python_opt;
+  std::string python = req.python;
   if (python.empty()) python = access("/usr/bin/python3", X_OK) == 0 ? "/usr/bin/python3" : "python3";
-  std::vector<std::string> args{python, script, traj, "--out", png, "--frame", std::to_string(frame),
-                                "--projection", projection};
+  std::vector<std::string> args{python, script, traj, "--out", png};
+  if (table) {
+    for (const auto& [opt, v] : {std::pair{"--x", req.x}, {"--y", req.y}, {"--series", req.series}})
+      if (!v.empty()) {
+        args.push_back(opt);
+        args.push_back(v);
+      }
+  } else {
+    args.insert(args.end(), {"--frame", std::to_string(req.frame), "--projection", req.projection});
+  }
   std::vector<char*> argv;
   for (auto& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
@@ -175,12 +205,12 @@ int plot(const std::string& traj, std::string png, const std::string& python_opt
 
 }  // namespace
 
-std::string find_plot_script(std::vector<std::string>* searched) {
+std::string find_plot_script(std::vector<std::string>* searched, const std::string& name) {
   std::vector<std::string> places;
   const std::string dir = exe_dir();
-  if (!dir.empty()) places.push_back((fs::path(dir) / ".." / "share" / "stokesian" / "stokesian_plot.py").lexically_normal().string());
-  places.push_back(STOKESIAN_PLOT_INSTALLED);
-  places.push_back(STOKESIAN_PLOT_SOURCE);
+  if (!dir.empty()) places.push_back((fs::path(dir) / ".." / "share" / "stokesian" / name).lexically_normal().string());
+  places.push_back((fs::path(STOKESIAN_PLOT_INSTALLED).parent_path() / name).string());
+  places.push_back((fs::path(STOKESIAN_PLOT_SOURCE).parent_path() / name).string());
   if (searched) *searched = places;
   for (const auto& p : places)
     if (fs::is_regular_file(p)) return p;
@@ -246,9 +276,19 @@ int main_cli(int argc, char** argv) {
   add_threads(check);
   check->add_flag("--no-estimate", no_estimate, "Do not evaluate the initial state (no cost estimate, no displacement check)");
 
-  CLI::App* plot_cmd = app.add_subcommand("plot", "Chart a trajectory: observables, particle statistics, a snapshot (PNG)");
+  CLI::App* plot_cmd = app.add_subcommand(
+      "plot", "Chart a trajectory (observables, particle statistics, a snapshot) or a sweep's table (PNG)");
   std::string traj;
-  plot_cmd->add_option("trajectory", traj, "Trajectory written by run or solve")->required()->type_name("FILE.h5");
+  PlotRequest plot_req;
+  plot_cmd->add_option("trajectory", traj, "Trajectory written by run or solve, or a sweep's folder or summary.csv")
+      ->required()
+      ->type_name("FILE.h5|DIR");
+  plot_cmd->add_option("--y", plot_req.y, "Sweep table: the observable (or numeric column) on the vertical axis")
+      ->type_name("NAME");
+  plot_cmd->add_option("--x", plot_req.x, "Sweep table: the swept key on the horizontal axis; default the first")
+      ->type_name("KEY");
+  plot_cmd->add_option("--series", plot_req.series, "Sweep table: the swept key giving one line per value")
+      ->type_name("KEY");
   plot_cmd->add_option("--out", out, "Image file; default: the trajectory's name with .png")
       ->type_name("FILE.png")
       ->default_str("FILE.png");
@@ -307,7 +347,14 @@ int main_cli(int argc, char** argv) {
   if (!threads_text.empty()) threads = std::stoi(threads_text);  // validated above
   if (threads > 0) omp_set_num_threads(threads);
 
-  if (plot_cmd->parsed()) return plot(traj, out, python, std::stol(frame_text), projection);
+  if (plot_cmd->parsed()) {
+    plot_req.input = traj;
+    plot_req.png = out;
+    plot_req.python = python;
+    plot_req.frame = std::stol(frame_text);
+    plot_req.projection = projection;
+    return plot(plot_req);
+  }
   if (sweep_cmd->parsed()) {
     sweep_opt.jobs = std::stoi(jobs_text);
     sweep_opt.threads = std::stoi(sweep_threads_text);

@@ -10,6 +10,7 @@ int main_cli(int argc, char** argv);
 
 // The plot script: next to an installed binary (<exe>/../share/stokesian), at the configured
 // install prefix, or in the source tree; empty when none exists. `searched` lists the places.
-std::string find_plot_script(std::vector<std::string>* searched = nullptr);
+std::string find_plot_script(std::vector<std::string>* searched = nullptr,
+                             const std::string& name = "stokesian_plot.py");
 
 }  // namespace stokesian::app
