@@ -191,7 +191,7 @@ Sweep parse_sweep(const std::string& text, const std::string& path) {
   std::string base = bn->as_string()->get();
   if (!base.empty() && base[0] != '/') {
     const auto dir = std::filesystem::path(path).parent_path();
-    base = (dir.empty() ? std::filesystem::path(base) : dir / base).string();
+    base = (dir.empty() ? std::filesystem::path(base) : dir / base).lexically_normal().string();
   }
   sw.base = base;
   if (!std::filesystem::exists(base)) fail(path, bn, "base = \"" + bn->as_string()->get() + "\": no such file (" + base + ")");

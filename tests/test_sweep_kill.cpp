@@ -124,6 +124,17 @@ TEST_CASE("sweep: killed at seeded moments and resumed, identical to an uninterr
   CHECK(summary_without_timing(got / "summary.csv") == before);
 }
 
+TEST_CASE("sweep: a malformed sweep is refused with exit status 2 before anything is written") {
+  SweepWork w("sweep_bad", kBase, "base = \"base.toml\"\n[[grid]]\nkey = \"time.steps\"\nvalues = [10, -1]\n");
+  const fs::path out = w.dir / "out";
+  const ChildOutcome o = run_sweep(w.dir / "sweep.toml", out);
+  CHECK(o.status == 2);
+  CHECK(!fs::exists(out));
+  const std::string err = slurp(out.string() + ".stderr");
+  CHECK(err.find((w.dir / "sweep.toml").string() + ":4: [time] steps") != std::string::npos);
+  CHECK(err.find("run_0001") != std::string::npos);
+}
+
 TEST_CASE("sweep: a failing run is recorded, the others finish, exit status 6") {
   SweepWork w("sweep_fail", kBase, kSweep);
   // dt so large that the contact force blows the dense replica up: overlap beyond max_overlap.
