@@ -31,8 +31,15 @@ for ax, scene in zip(axes[0], scenes):
                  f"KS D = {r['ks_D']:.3g}, p = {r['ks_p']:.2g}")
         ax.step(c, r["density"], where="mid", lw=1.4, label=label, color="C0" if r["drift"] else "C3")
         ref = (c, r["boltzmann"])
-        print(f"{scene:5s} drift={r['drift']!s:5s}: steps {r['steps']}, tau_int {r['tau_int_steps']:.1f} steps, "
+        print(f"{r['scene']:5s} drift={r['drift']!s:5s}: steps {r['steps']}, tau_int {r['tau_int_steps']:.1f} steps, "
               f"stride {r['stride_steps']}, samples {r['samples']}, KS D {r['ks_D']:.4g}, p {r['ks_p']:.3g}")
+    # The wall's reference law checked without hydrodynamics (free draining, no drift needed).
+    for r in runs:
+        if scene == "wall" and r["scene"] == "wall_free_draining":
+            e = np.array(r["edges"])
+            c = 0.5 * (e[1:] + e[:-1])
+            ax.step(c, r["density"], where="mid", lw=1.0, color="C2",
+                    label=f"free draining (law check): n = {r['samples']}, KS p = {r['ks_p']:.2g}")
     if ref:
         ax.plot(ref[0], ref[1], "k--", lw=1.2, label="Boltzmann")
     if scene == "dimer":
@@ -42,7 +49,8 @@ for ax, scene in zip(axes[0], scenes):
         ax.axvline(d["a1"] + d["a2"], color="grey", lw=0.8, ls=":")
     else:
         w = data["wall"]
-        ax.set_xlabel("height z above the wall plane, z ≥ z_full [a]")
+        ax.set_xlabel("height z of the mobile sphere's centre [a] (z_w = %g; z_full = %g dotted)" % (w["zw"], w["z_full"]))
+        ax.axvline(w["z_full"], color="grey", lw=0.8, ls=":")
         ax.set_title(f"Sphere above a {w['n']}x{w['n']} fixed layer, g = {w['g']:g} kT/a")
     ax.set_ylabel("probability density")
     ax.legend(fontsize=8)
