@@ -56,9 +56,7 @@
 // 1600 with 128, 64, 32, 16, 8 configurations of 2 probes (about 10 min on 2 cores). --quick: phi 0.1 and 0.3, N = 50, 100 (4 and 2
 // configurations; under a minute on 2 cores, a smoke run); results self_diffusion_quick.json.
 #include "bench/harness.hpp"
-#include "engine/hydrodynamics.hpp"
-#include "engine/model.hpp"
-#include "trees/placement.hpp"
+#include "tests/support/self_diffusion.hpp"
 
 #include <cmath>
 #include <cstdio>
@@ -67,93 +65,21 @@
 
 using namespace stokesian;
 using bench::Results;
+using namespace stokesian::self_diffusion;
 
 namespace {
 
-constexpr double kHasimoto = 2.837297;
-
-double abade_fit(double phi) { return 1.0 - 1.8315 * phi * (1.0 + 0.12 * phi - 0.70 * phi * phi); }
-
-// High-frequency viscosity, generalised Saito form (see the header; cross-check only).
-double eta_inf_ratio(double phi) {
-  const double g = 1.0 + phi - 0.189 * phi * phi;
-  return (1.0 + 1.5 * phi * g) / (1.0 - phi * g);
-}
-
-struct Point {
-  double mean = 0.0, se = 0.0, L = 0.0, seconds = 0.0;
-  double seconds_placement = 0.0, seconds_sd = 0.0, seconds_far_field = 0.0;  // parts of seconds
-  long iterations = 0;                 // GMRES iterations, all SD solves
-  double mean_raw = 0.0, se_raw = 0.0;  // plain Hutchinson (no control variate), for comparison
+struct Point : self_diffusion::Estimate {
+  double seconds = 0.0;  // whole point; the parts are in the Estimate
 };
 
 // D_s/D0 at N particles, volume fraction phi: `configs` hard-sphere configurations (seeds
-// seed0, seed0 + 1, ...), `probes` Rademacher probes each.
+// seed0, seed0 + 1, ...), `probes` Rademacher probes each (tests/support/self_diffusion.hpp).
 Point measure(long n, double phi, int configs, int probes, std::uint64_t seed0, double tol) {
-  ResolvedModel m;
-  m.level = HydroModel::stokesian;
-  m.solver = "accelerated_sd";
-  m.moments = Moments::FTS;
-  m.far_field = "pme";
-  const double L = std::cbrt(double(n) * 4.0 / 3.0 * kPi / phi);
-  std::vector<double> per_config, raw;  // with and without the control variate
-  const double control = 1.0 / eta_inf_ratio(phi);
   Point p;
-  p.L = L;
   p.seconds = bench::time_once([&] {
-    for (int c = 0; c < configs; ++c) {
-      PlacementParams pp;
-      pp.count = n;
-      pp.seed = seed0 + std::uint64_t(c);
-      pp.min_gap = 1e-3;
-      pp.equilibration_sweeps = 100;
-      Placement pl;
-      p.seconds_placement += bench::time_once([&] { pl = place_particles(pp, Vec3(L, L, L)); });
-      Domain d;
-      d.kind = Domain::Kind::periodic;
-      d.box = pl.box;
-      Hydrodynamics h(m, 1.0, AmbientFlow{}, tol);
-      ResolvedModel mf;  // far-field RPY mobility for the control variate
-      mf.level = HydroModel::far_field;
-      mf.moments = Moments::F;
-      mf.far_field = "pme";
-      Hydrodynamics ff(mf, 1.0, AmbientFlow{}, tol);
-      const double m_self = (1.0 - kHasimoto / L + 4.0 * kPi / 3.0 / (L * L * L)) / (6.0 * kPi);
-      std::mt19937_64 rng(1000003ULL * pp.seed + std::uint64_t(n));
-      std::bernoulli_distribution coin(0.5);
-      const std::vector<Vec3> T(static_cast<std::size_t>(n), Vec3::Zero());
-      double sum = 0.0, sum_raw = 0.0;
-      for (int k = 0; k < probes; ++k) {
-        std::vector<Vec3> w(static_cast<std::size_t>(n));
-        for (auto& v : w)
-          for (int i = 0; i < 3; ++i) v[i] = coin(rng) ? 1.0 : -1.0;
-        HydroResult r, rf;
-        p.seconds_sd += bench::time_once([&] { r = h.solve(pl.position, pl.radius, {}, w, T, d); });
-        p.seconds_far_field += bench::time_once([&] { rf = ff.solve(pl.position, pl.radius, {}, w, T, d); });
-        p.iterations += r.iterations;
-        double wu = 0.0, wuf = 0.0;
-        for (long i = 0; i < n; ++i) {
-          wu += w[std::size_t(i)].dot(r.U[std::size_t(i)]);
-          wuf += w[std::size_t(i)].dot(rf.U[std::size_t(i)]);
-        }
-        const double e = wu - control * (wuf - 3.0 * double(n) * m_self);
-        sum += 6.0 * kPi * e / (3.0 * double(n));
-        sum_raw += 6.0 * kPi * wu / (3.0 * double(n));
-      }
-      per_config.push_back(sum / probes);
-      raw.push_back(sum_raw / probes);
-    }
+    static_cast<self_diffusion::Estimate&>(p) = self_diffusion::estimate(n, phi, configs, probes, seed0, tol);
   });
-  double s = 0.0, s2 = 0.0;
-  for (double v : per_config) s += v;
-  p.mean = s / configs;
-  for (double v : per_config) s2 += (v - p.mean) * (v - p.mean);
-  p.se = configs > 1 ? std::sqrt(s2 / (configs - 1) / configs) : 0.0;
-  s = s2 = 0.0;
-  for (double v : raw) s += v;
-  p.mean_raw = s / configs;
-  for (double v : raw) s2 += (v - p.mean_raw) * (v - p.mean_raw);
-  p.se_raw = configs > 1 ? std::sqrt(s2 / (configs - 1) / configs) : 0.0;
   return p;
 }
 
@@ -202,12 +128,12 @@ int main(int argc, char** argv) {
       std::printf("phi %.2f N %4ld L %6.2f configs %2d probes %d: D_s/D0 = %.4f +- %.4f (plain %.4f +- %.4f) (%.1f s: placement %.1f, SD %.1f, "
                   "far field %.1f; %.1f iterations per solve)\n",
                   phi, n, p.L, configs, probes, p.mean, p.se, p.mean_raw, p.se_raw, p.seconds, p.seconds_placement,
-                  p.seconds_sd, p.seconds_far_field, double(p.iterations) / (configs * probes));
+                  p.seconds_solve, p.seconds_far_field, double(p.iterations) / (configs * probes));
       std::fflush(stdout);
       res.add({{"kind", 0}, {"phi", phi}, {"N", double(n)}, {"L", p.L}, {"configs", double(configs)},
                {"probes", double(probes)}},
               {{"D", p.mean}, {"se", p.se}, {"D_plain", p.mean_raw}, {"se_plain", p.se_raw}, {"seconds", p.seconds},
-               {"seconds_placement", p.seconds_placement}, {"seconds_sd", p.seconds_sd},
+               {"seconds_placement", p.seconds_placement}, {"seconds_sd", p.seconds_solve},
                {"seconds_far_field", p.seconds_far_field},
                {"iterations", double(p.iterations) / (configs * probes)}});
       x.push_back(1.0 / p.L);
