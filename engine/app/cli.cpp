@@ -223,10 +223,10 @@ int main_cli(int argc, char** argv) {
   const std::string version = std::string("stokesian ") + build::version + " (" + build::git + ", " + build::compiler +
                               ", " + build::build_type + ")";
   app.set_version_flag("--version", version, "Print the version and build, then exit");
-  app.require_subcommand(1);  // one of run, solve, check, plot
+  app.require_subcommand(1);  // one of run, solve, check, plot, sweep
   app.footer(
       "Exit status: 0 success, 1 usage, 2 scene/config error (also: more memory than available), 3 physics error,\n"
-      "4 file error, 5 out of memory although the estimate fitted.\n"
+      "4 file error, 5 out of memory although the estimate fitted, 6 a sweep ended with failed or unfinished runs.\n"
       "Run `stokesian COMMAND --help` for the options of a command.");
 
   std::string scene, out, python, projection = "xy";
