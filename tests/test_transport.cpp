@@ -26,6 +26,13 @@
 //    phi 0.1 after Ladd's finite-size correction (+0.2 % at N 500), so its band is 3 % + 3 se,
 //    s_full = 0.011 (phi 0.1, N 500). At phi >= 0.2 SD's K lies above the fit (docs/transport.md);
 //    no test asserts agreement there.
+//  - Sierou & Brady (2001, J. Fluid Mech. 448, 115, fig. 9; digitised by A. Townsend, values in
+//    tests/data/rheology_references.json): settling velocity of a simple cubic array from their own
+//    (accelerated) SD code, an independent implementation of the same model; read-off uncertainty
+//    about 1 % of the axis range, so the band is 0.01. Zick & Homsy (1982, J. Fluid Mech. 115, 13,
+//    table 2; U/U0 = 1/K_drag) give the exact values, which SD exceeds by 5 % at phi 0.125 and by a
+//    factor 2.8 at 0.45: the same excess as for random suspensions (docs/transport.md), i.e. a
+//    property of SD's multipole truncation, not of this implementation. Printed, not asserted.
 // Power: without lubrication (far field only) eta'_inf at phi 0.3 is 2.15 against 2.65 and fails
 // the band (checked below); K in the frame of zero mean fluid velocity instead of zero volume flux
 // would be 1/(1 - phi) = 11 % higher at phi 0.1, outside the K band; without the finite-size
@@ -48,10 +55,10 @@ TEST_CASE("dilute limit: eta'_inf - 1 = 2.5 phi within 1 % for a simple cubic la
     MESSAGE("simple cubic phi " << phi << ": (eta' - 1)/(2.5 phi) = " << ratio);
     CHECK(std::abs(ratio - 1.0) <= 0.01);
   }
-  for (const double phi : {0.002, 0.005, 0.01}) {
-    const Estimate e = estimate(64, phi, 3, 11, 1e-6);
+  for (const double phi : {0.005, 0.01}) {
+    const Estimate e = estimate(32, phi, 4, 11, 1e-4);
     const double ratio = (e.eta - 1.0) / (2.5 * phi), se = e.se_eta / (2.5 * phi), expected = 1.0 + 2.0 * phi;
-    MESSAGE("random N 64 phi " << phi << ": (eta' - 1)/(2.5 phi) = " << ratio << " +- " << se << ", expected "
+    MESSAGE("random N 32 phi " << phi << ": (eta' - 1)/(2.5 phi) = " << ratio << " +- " << se << ", expected "
                                << expected);
     CHECK(std::abs(ratio - expected) <= 0.01 * expected + 3.0 * se);
   }
@@ -93,5 +100,26 @@ TEST_CASE("random hard spheres: eta'_inf at phi 0.3 and K at phi 0.1 against the
                                   << ", fit " << fit << " +- " << tol);
     CHECK(std::abs(e.K_inf - fit) <= tol);
     CHECK(std::abs(e.K_inf / (1.0 - phi) - fit) > tol);  // the other frame would be detected
+  }
+}
+
+TEST_CASE("settling simple cubic lattice at phi 0.125 ... 0.45: Sierou & Brady 2001 (SD) and Zick & Homsy 1982 (exact)") {
+  // 5^3 lattice sites in the periodic box (the box must exceed twice the near-field range).
+  const double table[][3] = {// phi, SD U/U0 (Sierou & Brady 2001 fig. 9), exact 1/K (Zick & Homsy 1982 table 2)
+                             {0.125, 0.2427, 1.0 / 4.292},
+                             {0.216, 0.1603, 1.0 / 7.442},
+                             {0.343, 0.1111, 1.0 / 15.4},
+                             {0.45, 0.1024, 1.0 / 28.1}};
+  for (const auto& row : table) {
+    const double phi = row[0], h = std::cbrt(4.0 / 3.0 * kPi / phi);
+    const int m = 5;
+    std::vector<Vec3> x;
+    for (int i = 0; i < m; ++i)
+      for (int j = 0; j < m; ++j)
+        for (int k = 0; k < m; ++k) x.push_back(Vec3(h * (i + 0.5), h * (j + 0.5), h * (k + 0.5)));
+    const Sample s = measure(x, std::vector<double>(x.size(), 1.0), Vec3(m * h, m * h, m * h), 1e-4);
+    MESSAGE("simple cubic phi " << phi << ": K = " << s.K << ", Sierou & Brady SD " << row[1] << ", Zick & Homsy exact "
+                                << row[2]);
+    CHECK(std::abs(s.K - row[1]) <= 0.01);
   }
 }
