@@ -1,6 +1,7 @@
 #include "engine/integrators.hpp"
 
 #include "engine/core/errors.hpp"
+#include "engine/core/sym_traceless.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -76,7 +77,7 @@ void add_noise(const State& s, Dynamics& d, double dt, Rng& rng, std::vector<Vec
 }  // namespace
 
 StepResult EulerIntegrator::step(const State& s, const Evaluation& start, Dynamics& d, Rng& rng) {
-  StepResult r{axpy(s.position, s.dt, start.hydro.U), s.dt, s.dt};
+  StepResult r{axpy(s.position, s.dt, start.hydro.U), s.dt, s.dt, {}};
   add_noise(s, d, s.dt, rng, r.x);
   return r;
 }
@@ -84,7 +85,7 @@ StepResult EulerIntegrator::step(const State& s, const Evaluation& start, Dynami
 StepResult MidpointIntegrator::step(const State& s, const Evaluation& start, Dynamics& d, Rng& rng) {
   const double dt = s.dt;
   const std::vector<Vec3> xmid = axpy(s.position, 0.5 * dt, start.hydro.U);
-  StepResult r{axpy(s.position, dt, d.evaluate(s, xmid, 0.5 * dt).hydro.U), dt, dt};
+  StepResult r{axpy(s.position, dt, d.evaluate(s, xmid, 0.5 * dt).hydro.U), dt, dt, {}};
   add_noise(s, d, dt, rng, r.x);
   return r;
 }
@@ -93,16 +94,29 @@ StepResult FixmanIntegrator::step(const State& s, const Evaluation& start, Dynam
   const double dt = s.dt;
   const VecX xi = d.brownian_force(s, dt, rng);
   // First stage at x0: the deterministic solve of `start` is reused when athermal.
-  const std::vector<Vec3> U0 = xi.size() ? d.evaluate(s, s.position, 0.0, &xi).hydro.U : start.hydro.U;
-  const std::vector<Vec3> xmid = axpy(s.position, 0.5 * dt, U0);
-  const std::vector<Vec3> U1 = d.evaluate(s, xmid, 0.5 * dt, xi.size() ? &xi : nullptr).hydro.U;
-  return StepResult{axpy(s.position, dt, U1), dt, dt};
+  if (!xi.size()) {
+    const std::vector<Vec3> xmid = axpy(s.position, 0.5 * dt, start.hydro.U);
+    return StepResult{axpy(s.position, dt, d.evaluate(s, xmid, 0.5 * dt).hydro.U), dt, dt, {}};
+  }
+  const HydroResult h0 = d.evaluate(s, s.position, 0.0, &xi).hydro;
+  const std::vector<Vec3> xmid = axpy(s.position, 0.5 * dt, h0.U);
+  const HydroResult h1 = d.evaluate(s, xmid, 0.5 * dt, &xi).hydro;
+  StepResult r{axpy(s.position, dt, h1.U), dt, dt, {}};
+  // Brownian stresslet (engine/stress.hpp): the change of the stresslets between the stages, both
+  // driven by the same xi. Its mean, by the expansion above with A = dS/dF = R_SU R_FU^{-1} (S the
+  // stresslets exerted on the fluid), is E[(A(x') - A(x0)) xi] = kT d_k A_{.k} = -S^B.
+  if (!h0.S.empty() && h0.S.size() == h1.S.size()) {
+    Mat3 sum = Mat3::Zero();
+    for (std::size_t i = 0; i < h0.S.size(); ++i) sum += from_vec5(h1.S[i]) - from_vec5(h0.S[i]);
+    r.brownian_stresslet = sum;
+  }
+  return r;
 }
 
 StepResult Rkf45Integrator::step(const State& s, const Evaluation& start, Dynamics& d, Rng&) {
   const VelocityField U = [&](const std::vector<Vec3>& x, double t) { return d.evaluate(s, x, t).hydro.U; };
   RkfStep k = rkf45_step(U, s.position, start.hydro.U, s.dt, tol_, dt_min_);
-  return StepResult{std::move(k.x), k.dt_used, k.dt_next};
+  return StepResult{std::move(k.x), k.dt_used, k.dt_next, {}};
 }
 
 }  // namespace stokesian

@@ -299,9 +299,11 @@ ResolvedModel resolve_model(const Scene& s) {
   }
 
   // Integrator.
-  const IntegratorEntry* integ = integrators().find(s.time.integrator);
+  const bool auto_integrator = s.time.integrator == "auto";
+  const IntegratorEntry* integ = integrators().find(auto_integrator ? "euler" : s.time.integrator);
   if (!integ)
-    unavailable(s, "time", "integrator", "\"" + s.time.integrator + "\" is not one of " + quoted_list(integrators().names()));
+    unavailable(s, "time", "integrator",
+                "\"" + s.time.integrator + "\" is not \"auto\" or one of " + quoted_list(integrators().names()));
   m.integrator = integ->name;
   // Thermal drift kT div(R^{-1}) (engine/integrators.hpp): needed wherever the sampled mobility is
   // not divergence free: any near-field resistance, or far-field mobilities constrained by rigid
@@ -313,7 +315,7 @@ ResolvedModel resolve_model(const Scene& s) {
     const std::string why = m.level == HydroModel::stokesian ? "the near-field resistance"
                             : m.moments == Moments::FTS      ? "the rigid-stresslet constraint"
                                                              : "the fixed particles";
-    if (s.lines.count("time.integrator") == 0) {
+    if (auto_integrator) {
       m.integrator = "fixman";
       m.reasons.push_back("auto integrator: Brownian motion with " + why +
                           " needs the thermal drift kT div(R^-1) -> fixman (Fixman midpoint; set [time] integrator to choose)");

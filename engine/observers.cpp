@@ -1,7 +1,9 @@
 #include "engine/observers.hpp"
 
 #include "engine/core/errors.hpp"
+#include "engine/core/flow.hpp"
 #include "engine/core/sym_traceless.hpp"
+#include "engine/stress.hpp"
 #include "trees/neighbor_list.hpp"
 
 #include <algorithm>
@@ -96,6 +98,57 @@ class StressletSum final : public Observer {
   }
 };
 
+// Periodic boxes: the bulk stress by contribution (engine/stress.hpp), and in simple shear the
+// relative viscosity and normal-stress differences of each contribution.
+class BulkStress final : public Observer {
+ public:
+  BulkStress(const Scene& scene, const ResolvedModel& m)
+      : mu_(scene.fluid.viscosity),
+        kT_(scene.fluid.kT),
+        E_(ambient_flow(scene.flow).E),
+        rate_(scene.flow.kind == FlowParams::Kind::simple_shear ? scene.flow.rate : 0.0),
+        fts_(has_stresslet(m.moments)),
+        pairs_(!scene.forces.pair.empty()),
+        brownian_(m.brownian),
+        brownian_stresslet_(m.brownian && has_stresslet(m.moments) && m.integrator == "fixman") {}
+  void observe(const State& s, const Evaluation& ev, Frame& f) const override {
+    StressInput in;
+    in.volume = s.domain.box.prod();
+    in.viscosity = mu_;
+    in.E = E_;
+    for (std::size_t i = 0; i < s.size(); ++i) in.mobile += s.fixed.empty() || !s.fixed[i];
+    in.hydrodynamic = fts_ && ev.hydro.S.size() == s.size();
+    if (in.hydrodynamic)
+      for (std::size_t i = 0; i < s.size(); ++i)
+        (!s.fixed.empty() && s.fixed[i] ? in.stresslet_fixed : in.stresslet_mobile) += from_vec5(ev.hydro.S[i]);
+    in.fixed = in.mobile < long(s.size());
+    in.interparticle = pairs_;
+    in.virial = ev.pair.virial;
+    in.brownian = brownian_;
+    in.kT = kT_;
+    if (brownian_stresslet_) {
+      if (s.window_steps > 0) in.brownian_stresslet = s.brownian_stresslet_sum / double(s.window_steps);
+      f.set_count("brownian_window_steps", s.window_steps);
+    }
+    for (const StressPart& p : bulk_stress(in)) {
+      const std::string suffix = p.name == "total" ? "" : "_" + p.name;
+      const Vec6 c = six_components(p.sigma);
+      f.observables["stress" + suffix] = Field{{6}, std::vector<double>(c.data(), c.data() + 6), units::stress, false};
+      if (rate_ != 0.0) {
+        f.set_scalar("relative_viscosity" + suffix, shear_viscosity(p.sigma, mu_, rate_));
+        f.set_scalar("N1" + suffix, normal_difference_1(p.sigma), units::stress);
+        f.set_scalar("N2" + suffix, normal_difference_2(p.sigma), units::stress);
+      }
+    }
+  }
+
+ private:
+  double mu_, kT_;
+  Mat3 E_;
+  double rate_;
+  bool fts_, pairs_, brownian_, brownian_stresslet_;
+};
+
 class Gaps final : public Observer {
  public:
   void observe(const State& s, const Evaluation& ev, Frame& f) const override {
@@ -144,6 +197,7 @@ std::vector<std::unique_ptr<Observer>> make_observers(const Scene& scene, const 
     if ((all || std::count(rec.begin(), rec.end(), e.name)) && e.available(model))
       obs.push_back(std::make_unique<RecordedOutput>(e));
   if (has_stresslet(model.moments)) obs.push_back(std::make_unique<StressletSum>());
+  if (scene.domain.periodic()) obs.push_back(std::make_unique<BulkStress>(scene, model));
   obs.push_back(std::make_unique<Gaps>());
   obs.push_back(std::make_unique<RunStatistics>());
   return obs;

@@ -123,6 +123,20 @@ double HarmonicLaw::default_cutoff(double, double) const {
   return rest_gap + std::sqrt(2.0 * kHarmonicCutoffEnergy / stiffness);
 }
 
+EnergyDerivative RepulsionLaw::operator()(double r, double ai, double aj) const {
+  // U = -F0 a ln(1 - e^{-tau h}), -dU/dh = F0 (tau a) e^{-tau h} / (1 - e^{-tau h}), a = 1 (the
+  // reference radius); log1p/expm1 keep the precision at small and large tau h.
+  const double hmin = min_gap;
+  const double h = std::max(r - ai - aj, hmin);
+  const double e = std::exp(-decay * h);
+  const double U = -strength * std::log1p(-e);
+  const double dUdr = -strength * decay * e / -std::expm1(-decay * h);
+  if (r - ai - aj >= hmin) return {U, dUdr};
+  return {U + dUdr * (r - ai - aj - hmin), dUdr};  // linear continuation below the floor
+}
+
+double RepulsionLaw::default_cutoff(double, double tol) const { return std::log(1.0 / tol) / decay; }
+
 MorseLaw morse_law(const PairForceParams& p) {
   if (!(p.morse_kappa > 0.0)) throw std::invalid_argument("morse: kappa must be positive");
   return {p.morse_depth, p.morse_kappa};
@@ -136,6 +150,15 @@ DlvoLaw dlvo_law(const PairForceParams& p) {
 }
 
 HertzLaw hertz_law(const PairForceParams& p) { return {p.hertz_stiffness}; }
+
+RepulsionLaw repulsion_law(const PairForceParams& p) {
+  if (!(p.repulsion_strength >= 0.0) || !std::isfinite(p.repulsion_strength))
+    throw std::invalid_argument("repulsion: strength must be >= 0 and finite");
+  if (!(p.repulsion_decay > 0.0) || !std::isfinite(p.repulsion_decay))
+    throw std::invalid_argument("repulsion: decay must be positive and finite");
+  if (!(p.min_gap > 0.0)) throw std::invalid_argument("repulsion: min_gap must be positive");
+  return {p.repulsion_strength, p.repulsion_decay, p.min_gap};
+}
 
 HarmonicLaw harmonic_law(const PairForceParams& p) {
   if (!(p.harmonic_stiffness > 0.0) || !std::isfinite(p.harmonic_stiffness))

@@ -34,6 +34,12 @@
 //      U(h) = U(h_min) + U'(h_min)(h - h_min): the force stays finite and continuous (constant
 //      below h_min) and remains the exact derivative of the energy. Overlap needs a Hertz law as
 //      well ([T] eq. 2.7 pairs DLVO with Hertz contact in the same way).
+//  Repulsion (the short-range force of hard-sphere SD rheology: Bossis & Brady 1984; Sierou &
+//    Brady 2002; Banchio & Brady 2003): |F| = F0 (tau a) e^{-tau h} / (1 - e^{-tau h}), from
+//    U = -F0 a ln(1 - e^{-tau h}), a = 1 the reference radius (so F0 is the published force scale
+//    in kT/a and tau a the published dimensionless decay); |F| grows as F0 a / h at contact and
+//    decays as F0 tau a e^{-tau h} beyond the range 1/tau. Below h_min (PairForceParams::min_gap) it continues linearly as DLVO does
+//    (constant force F(h_min), also for overlaps).
 //  Hertz: U = (2/5) k_H delta^{5/2}, dU/dr = -k_H delta^{3/2}, delta = a_i + a_j - r > 0, else 0.
 //  Harmonic spring on the gap: U = (k/2) (h - h_0)^2, dU/dr = k (h - h_0), for all h (overlap
 //    included); rest gap h_0 >= 0, so the rest centre distance is a_i + a_j + h_0 for every pair
@@ -100,12 +106,19 @@ struct HarmonicLaw {
   double default_cutoff(double, double) const;  // h_0 + sqrt(2 kHarmonicCutoffEnergy / k)
 };
 
+struct RepulsionLaw {
+  double strength, decay, min_gap;  // F0 [kT/a], tau [1/a], h_min [a]
+  EnergyDerivative operator()(double r, double ai, double aj) const;
+  double default_cutoff(double, double tol) const;  // ln(1/tol)/tau: there U ~ F0 a e^{-tau h} = tol F0 a
+};
+
 // Build the evaluators; throw std::invalid_argument for kappa <= 0, (DLVO) min_gap <= 0,
 // (harmonic) stiffness <= 0, rest_gap < 0, or a positive cutoff not beyond rest_gap.
 MorseLaw morse_law(const PairForceParams& p);
 DlvoLaw dlvo_law(const PairForceParams& p);
 HertzLaw hertz_law(const PairForceParams& p);
 HarmonicLaw harmonic_law(const PairForceParams& p);
+RepulsionLaw repulsion_law(const PairForceParams& p);  // strength >= 0, decay > 0, min_gap > 0
 
 // The one dispatch from a law's parameters to its evaluator: f(law) with the law of p.kind.
 template <class F>
@@ -114,6 +127,7 @@ decltype(auto) with_law(const PairForceParams& p, F&& f) {
     case PairForceParams::Kind::morse: return f(morse_law(p));
     case PairForceParams::Kind::dlvo: return f(dlvo_law(p));
     case PairForceParams::Kind::harmonic: return f(harmonic_law(p));
+    case PairForceParams::Kind::repulsion: return f(repulsion_law(p));
     case PairForceParams::Kind::hertz: break;
   }
   return f(hertz_law(p));

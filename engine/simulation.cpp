@@ -227,6 +227,8 @@ void Simulation::advance(State& s, const Evaluation& ev) {
   Rng rng = legacy_noise_ ? RandomStream::continuing_legacy(*legacy_noise_)
                           : RandomStream::for_purpose(scene_.seed, Purpose::brownian, std::uint64_t(s.step));
   StepResult r = integrator_->step(s, ev, *this, rng);
+  s.window_steps += 1;
+  if (r.brownian_stresslet) s.brownian_stresslet_sum += *r.brownian_stresslet;
   s.position = std::move(r.x);
   s.time += r.dt_used;
   s.step += 1;
@@ -343,6 +345,9 @@ long Simulation::run(State& s, OutputSink& out, const RunControl& control) {
       out.record(f);
       latest = std::move(f);
       have_latest = true;
+      // The frame has consumed the sums over the steps since the previous one.
+      s.window_steps = 0;
+      s.brownian_stresslet_sum.setZero();
     }
     frame_done = false;
     const bool at_end = s.step >= last || (control.max_steps >= 0 && taken >= control.max_steps);

@@ -3,6 +3,7 @@
 #include "io/scene_toml.hpp"
 
 #include <cerrno>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <sstream>
@@ -103,8 +104,15 @@ void write_checkpoint(const std::string& path, const Checkpoint& c) {
   w.str(c.scene_toml);
   w.str(c.model);
   w.i64(c.trajectory_frames);
-  w.u64(c.values.size());
-  for (const auto& [k, v] : c.values) {
+  // The state's window sums travel as values "state.*" (format unchanged; read back below).
+  std::map<std::string, double> values = c.values;
+  if (s.window_steps != 0) values["state.window_steps"] = double(s.window_steps);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      if (s.brownian_stresslet_sum(i, j) != 0.0)
+        values["state.brownian_stresslet_sum." + std::to_string(3 * i + j)] = s.brownian_stresslet_sum(i, j);
+  w.u64(values.size());
+  for (const auto& [k, v] : values) {
     w.str(k);
     w.f64(v);
   }
@@ -191,6 +199,23 @@ Checkpoint read_checkpoint(const std::string& path) {
     c.strings[k] = r.str();
   }
   if (r.pos != payload.size()) throw IoError(path + ": checkpoint has trailing bytes (corrupt)");
+  for (auto it = c.values.begin(); it != c.values.end();) {
+    const std::string& k = it->first;
+    if (k.rfind("state.", 0) != 0) {
+      ++it;
+      continue;
+    }
+    if (k == "state.window_steps") {
+      s.window_steps = std::int64_t(it->second);
+    } else if (k.rfind("state.brownian_stresslet_sum.", 0) == 0) {
+      const int e = std::atoi(k.c_str() + std::strlen("state.brownian_stresslet_sum."));
+      if (e < 0 || e > 8) throw IoError(path + ": checkpoint value " + k + " is not a stresslet entry (corrupt)");
+      s.brownian_stresslet_sum(e / 3, e % 3) = it->second;
+    } else {
+      throw IoError(path + ": checkpoint holds an unknown state value " + k + " (written by a newer version?)");
+    }
+    it = c.values.erase(it);
+  }
   return c;
 }
 

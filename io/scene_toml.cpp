@@ -446,7 +446,8 @@ PairForceParams read_pair(const Reader& R, const toml::table& t, std::size_t ind
   // Unknown keys first (a misspelt `kind` is reported as itself, not as a missing `kind`); keys of
   // another kind are refused below, once the kind is known.
   R.only(t, T, {"kind", "cutoff", "depth", "kappa", "hamaker", "debye_kappa", "surface_potential",
-                "surface_potential_reduced", "born_sigma", "min_gap", "double_layer", "stiffness", "rest_gap"});
+                "surface_potential_reduced", "born_sigma", "min_gap", "double_layer", "stiffness", "rest_gap", "strength",
+                "decay"});
   const std::string kind = R.choice(t, T, "kind", "", name_list<PairForceParams::Kind>());
   if (kind.empty())
     R.fail(&t, "[[forces.pair]] kind", "required (" + quoted_list(name_list<PairForceParams::Kind>()) + ")");
@@ -478,6 +479,12 @@ PairForceParams read_pair(const Reader& R, const toml::table& t, std::size_t ind
         << " (the spring's minimum would be cut off); allowed (rest_gap, 1e6], or 0 for the default";
       R.fail(R.get(t, T, "cutoff"), R.where(T, "cutoff"), o.str());
     }
+  } else if (kind == "repulsion") {
+    p.kind = PairForceParams::Kind::repulsion;
+    R.only(t, T, {"kind", "cutoff", "strength", "decay", "min_gap"});
+    p.repulsion_strength = R.number(t, T, "strength", p.repulsion_strength, 0.0, 1e12);
+    p.repulsion_decay = R.number(t, T, "decay", p.repulsion_decay, 0.0, 1e8, true);
+    p.min_gap = R.number(t, T, "min_gap", p.min_gap, 0.0, 1.0, true);
   } else {
     p.kind = PairForceParams::Kind::hertz;
     R.only(t, T, {"kind", "cutoff", "stiffness"});
@@ -698,11 +705,22 @@ Scene parse_scene(const toml::table& root, const std::string& source) {
   }
 
   const toml::table& flow = sub(R, root, "flow");
-  R.only(flow, "flow", {"kind", "rate"});
+  R.only(flow, "flow", {"kind", "rate", "peclet"});
   s.flow.kind = R.name(flow, "flow", "kind", FlowParams::Kind::none);
   s.flow.rate = R.number(flow, "flow", "rate", 0.0, -1e12, 1e12);
-  if (s.flow.kind != FlowParams::Kind::none && !flow.contains("rate"))
-    R.fail(&flow, "[flow] rate", "required when kind is not \"none\"");
+  if (flow.contains("peclet")) {
+    // Pe = 6 pi mu a^3 rate / kT with a = 1 (docs/rheology.md): the rate follows from Pe and kT.
+    if (flow.contains("rate"))
+      R.fail(flow.get("peclet"), "[flow] peclet", "give either rate or peclet, not both (peclet sets rate = peclet kT / (6 pi mu))");
+    if (s.flow.kind == FlowParams::Kind::none)
+      R.fail(flow.get("peclet"), "[flow] peclet", "needs a flow: set [flow] kind = \"simple_shear\" or \"planar_extension\"");
+    if (!(s.fluid.kT > 0.0))
+      R.fail(flow.get("peclet"), "[flow] peclet", "needs [fluid] kT > 0 (Pe = 6 pi mu a^3 rate / kT); give rate for an athermal scene");
+    s.flow.peclet = R.number(flow, "flow", "peclet", 0.0, -1e12, 1e12);
+    s.flow.rate = s.flow.peclet * s.fluid.kT / (6.0 * kPi * s.fluid.viscosity);
+  }
+  if (s.flow.kind != FlowParams::Kind::none && !flow.contains("rate") && !flow.contains("peclet"))
+    R.fail(&flow, "[flow] rate", "required when kind is not \"none\" (or give peclet)");
 
   const toml::table& hy = sub(R, root, "hydrodynamics");
   R.only(hy, "hydrodynamics", {"model", "moments", "solver", "far_field", "tolerance", "lubrication_cutoff",
@@ -851,6 +869,10 @@ std::string resolved_toml(const Scene& s) {
       t.insert("born_sigma", p.born_sigma);
       t.insert("min_gap", p.min_gap);
       t.insert("double_layer", name_of(p.double_layer));
+    } else if (p.kind == PairForceParams::Kind::repulsion) {
+      t.insert("strength", p.repulsion_strength);
+      t.insert("decay", p.repulsion_decay);
+      t.insert("min_gap", p.min_gap);
     } else if (p.kind == PairForceParams::Kind::harmonic) {
       t.insert("stiffness", p.harmonic_stiffness);
       t.insert("rest_gap", p.harmonic_rest_gap);
@@ -861,7 +883,8 @@ std::string resolved_toml(const Scene& s) {
   }
   if (!pair.empty()) forces.insert("pair", pair);
   root.insert("forces", forces);
-  root.insert("flow", toml::table{{"kind", name_of(s.flow.kind)}, {"rate", s.flow.rate}});
+  if (s.flow.peclet != 0.0) root.insert("flow", toml::table{{"kind", name_of(s.flow.kind)}, {"peclet", s.flow.peclet}});
+  else root.insert("flow", toml::table{{"kind", name_of(s.flow.kind)}, {"rate", s.flow.rate}});
   toml::table hydro{{"model", name_of(s.hydro.model)},
                     {"moments", name_of(s.hydro.moments)},
                     {"far_field", s.hydro.far_field},
@@ -952,17 +975,24 @@ void table_differences(const toml::table& a, const toml::table& b, const std::st
 
 std::vector<std::string> scene_differences(const std::string& a, const std::string& b) {
   if (a == b) return {};
-  std::string ra, rb;
+  Scene sa, sb;
   try {
-    ra = resolved_toml(parse_scene(a, "stored scene"));
+    sa = parse_scene(a, "stored scene");
   } catch (const ConfigError& e) {
     return {std::string("the stored scene does not parse: ") + e.what()};
   }
   try {
-    rb = resolved_toml(parse_scene(b, "this scene"));
+    sb = parse_scene(b, "this scene");
   } catch (const ConfigError& e) {
     return {std::string("this scene does not parse: ") + e.what()};
   }
+  // Scenes stored before [time] integrator had "auto" say "euler" where none was given, and the
+  // model chose as "auto" does now. An explicit "euler" runs what "auto" picks for the same scene
+  // (where "auto" picks fixman, "euler" was and is refused), so the two are the same run.
+  if ((sa.time.integrator == "euler" && sb.time.integrator == "auto") ||
+      (sa.time.integrator == "auto" && sb.time.integrator == "euler"))
+    sa.time.integrator = sb.time.integrator = "auto";
+  const std::string ra = resolved_toml(sa), rb = resolved_toml(sb);
   if (ra == rb) return {};
   std::vector<std::string> out;
   table_differences(toml::parse(ra), toml::parse(rb), "", out);

@@ -96,7 +96,7 @@ std::set<std::string> documented(const std::string& heading) {
   std::istringstream doc(read_text(std::string(STOKESIAN_SOURCE_DIR) + "/docs/output.md"));
   std::set<std::string> names;
   bool inside = false;
-  const std::regex row(R"(^\|\s*`([a-z_/]+)`\s*\|)");
+  const std::regex row(R"(^\|\s*`([A-Za-z0-9_/]+)`\s*\|)");
   for (std::string line; std::getline(doc, line);) {
     if (line.rfind("#", 0) == 0) {
       if (inside) break;
@@ -326,10 +326,33 @@ moments = "FTS"
 dt = 0.1
 steps = 1
 )";
+  // A sheared Brownian periodic FTS run with a pair force and a fixed particle: every stress part.
+  const std::string sheared = R"([fluid]
+kT = 1.0
+[domain]
+kind = "periodic"
+box = [10, 10, 10]
+[particles]
+positions = [[0,0,0],[2.3,0,0],[0,2.4,0.5]]
+fixed = [false, false, true]
+[[forces.pair]]
+kind = "repulsion"
+decay = 10.0
+[flow]
+kind = "simple_shear"
+rate = 0.5
+[hydrodynamics]
+model = "stokesian"
+moments = "FTS"
+[time]
+dt = 0.001
+steps = 2
+)";
   run_scene(brownian_box(2), tmp / "a.h5");
   run_scene(fts, tmp / "b.h5");
+  run_scene(sheared, tmp / "c.h5");
   std::set<std::string> observables, elements;
-  for (const std::string& f : {tmp / "a.h5", tmp / "b.h5"}) {
+  for (const std::string& f : {tmp / "a.h5", tmp / "b.h5", tmp / "c.h5"}) {
     const auto info = io::inspect_trajectory(f);
     observables.insert(info.observables.begin(), info.observables.end());
     for (const auto& spec : info.particle_fields) elements.insert(spec.name);

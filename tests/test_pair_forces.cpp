@@ -635,3 +635,79 @@ TEST_CASE("Harmonic: scene keys, defaults and errors naming file, line, key and 
   e = error_of(two + "depth = 1\n");  // a key of another law
   CHECK(has(e, "depth"));
 }
+
+// ---------------------------------------------------------------------------------------------
+// Short-range repulsion of hard-sphere rheology (kind = "repulsion")
+// ---------------------------------------------------------------------------------------------
+
+TEST_CASE("Repulsion: |F| = F0 tau e^{-tau h}/(1 - e^{-tau h}), the derivative of U = -F0 ln(1 - e^{-tau h}); floor") {
+  PairForceParams p;
+  p.kind = Kind::repulsion;
+  p.repulsion_strength = 2.0;
+  p.repulsion_decay = 100.0;
+  p.min_gap = 1e-4;
+  const RepulsionLaw law = repulsion_law(p);
+  for (double lam : kRatios) {
+    const double ai = 1.0, aj = lam;
+    for (double h : {2e-4, 1e-3, 5e-3, 0.01, 0.03, 0.08}) {
+      const EnergyDerivative f = law(ai + aj + h, ai, aj);
+      // Closed forms, independent of the implementation's log1p/expm1.
+      const double e = std::exp(-100.0 * h);
+      CHECK(f.dUdr == doctest::Approx(-2.0 * 100.0 * e / (1.0 - e)).epsilon(1e-10));  // h recomputed from r: rounding
+      CHECK(f.U == doctest::Approx(-2.0 * std::log(1.0 - e)).epsilon(1e-10));
+      const double d = 1e-5 * h;
+      const double fd = central_difference([&](double r) { return law(r, ai, aj); }, ai + aj + h, d);
+      CAPTURE(lam);
+      CAPTURE(h);
+      CHECK(f.dUdr == doctest::Approx(fd).epsilon(1e-6));
+    }
+    // Limits: F0 / h near contact (tau h << 1), F0 tau e^{-tau h} far (tau h >> 1).
+    CHECK(law(ai + aj + 1e-3, ai, aj).dUdr == doctest::Approx(-2.0 / 1e-3).epsilon(0.06));
+    CHECK(law(ai + aj + 0.2, ai, aj).dUdr == doctest::Approx(-200.0 * std::exp(-20.0)).epsilon(1e-8));
+    // Below the floor and in overlap: the force at min_gap, energy continued linearly (the gap
+    // r - a_i - a_j of r = a_i + a_j + 1e-4 is 1e-4 up to rounding).
+    const EnergyDerivative at = law(ai + aj + 1e-4, ai, aj);
+    for (double h : {5e-5, 0.0, -0.01}) {
+      CHECK(law(ai + aj + h, ai, aj).dUdr == doctest::Approx(at.dUdr).epsilon(1e-9));
+      CHECK(law(ai + aj + h, ai, aj).U == doctest::Approx(at.U + at.dUdr * (h - 1e-4)).epsilon(1e-9));
+    }
+  }
+  // Default cut-off ln(1e4)/tau, where the energy is 1e-4 F0.
+  CHECK(resolved_cutoff(p, 1.0) == doctest::Approx(std::log(1e4) / 100.0).epsilon(1e-14));
+  PairForceParams bad = p;
+  bad.repulsion_decay = 0.0;
+  CHECK_THROWS_AS(repulsion_law(bad), std::invalid_argument);
+}
+
+TEST_CASE("Repulsion: scene keys, defaults and errors naming file, line, key and allowed range") {
+  const std::string two = "[particles]\npositions = [[0,0,0],[3,0,0]]\n[[forces.pair]]\nkind = \"repulsion\"\n";
+  const Scene s = io::parse_scene(two, "r.toml");
+  REQUIRE(s.forces.pair.size() == 1);
+  CHECK(s.forces.pair[0].kind == Kind::repulsion);
+  CHECK(s.forces.pair[0].repulsion_strength == 1.0);
+  CHECK(s.forces.pair[0].repulsion_decay == 1000.0);
+  CHECK(s.forces.pair[0].min_gap == 1e-4);
+  const Scene t = io::parse_scene(two + "strength = 50\ndecay = 300\nmin_gap = 1e-5\n", "r.toml");
+  CHECK(t.forces.pair[0].repulsion_strength == 50.0);
+  CHECK(t.forces.pair[0].repulsion_decay == 300.0);
+  CHECK(t.forces.pair[0].min_gap == 1e-5);
+  // The resolved scene keeps the law.
+  const Scene u = io::parse_scene(io::resolved_toml(t), "r2.toml");
+  CHECK(u.forces.pair[0].repulsion_decay == 300.0);
+  auto error_of = [](const std::string& text) -> std::string {
+    try {
+      io::parse_scene(text, "bad.toml");
+    } catch (const ConfigError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  auto has = [](const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; };
+  std::string e = error_of(two + "decay = 0\n");
+  CHECK(has(e, "bad.toml:5: [forces.pair.0] decay"));
+  CHECK(has(e, "(0, 1e+08]"));
+  e = error_of(two + "strength = -1\n");
+  CHECK(has(e, "bad.toml:5: [forces.pair.0] strength"));
+  e = error_of(two + "stiffness = 1\n");  // a key of another law
+  CHECK(has(e, "stiffness"));
+}

@@ -522,3 +522,22 @@ TEST_CASE("[hydrodynamics] solver: auto picks dense below the crossover and acce
   for (const auto& r : ff.reasons) noted |= contains(r, "applies to the stokesian level only");
   CHECK(noted);
 }
+
+TEST_CASE("[flow] peclet sets rate = Pe kT / (6 pi mu); refused with rate, without kT or without a flow") {
+  const std::string base = "[particles]\npositions = [[0,0,0]]\n[fluid]\nkT = 2.0\nviscosity = 1.5\n";
+  const Scene s = io::parse_scene(base + "[flow]\nkind = \"simple_shear\"\npeclet = 10.0\n", "pe.toml");
+  CHECK(s.flow.peclet == 10.0);
+  CHECK(s.flow.rate == doctest::Approx(10.0 * 2.0 / (6.0 * kPi * 1.5)).epsilon(1e-15));
+  // The resolved scene keeps the Peclet number and gives the same rate.
+  const Scene r = io::parse_scene(io::resolved_toml(s), "pe2.toml");
+  CHECK(r.flow.peclet == 10.0);
+  CHECK(r.flow.rate == s.flow.rate);
+  auto has = [](const std::string& e, const std::string& part) { return e.find(part) != std::string::npos; };
+  std::string e = error_of(base + "[flow]\nkind = \"simple_shear\"\npeclet = 10.0\nrate = 1.0\n");
+  CHECK(has(e, "[flow] peclet"));
+  CHECK(has(e, "either rate or peclet"));
+  e = error_of("[particles]\npositions = [[0,0,0]]\n[flow]\nkind = \"simple_shear\"\npeclet = 10.0\n");
+  CHECK(has(e, "needs [fluid] kT > 0"));
+  e = error_of(base + "[flow]\npeclet = 10.0\n");
+  CHECK(has(e, "needs a flow"));
+}

@@ -341,6 +341,10 @@ int check(Simulation& sim, const CheckOptions& opt, std::FILE* out) {
       case PairForceParams::Kind::hertz:
         std::fprintf(out, "  pair: hertz, stiffness k_H %.4g kT/a^2.5 (contact only)\n", p.hertz_stiffness);
         break;
+      case PairForceParams::Kind::repulsion:
+        std::fprintf(out, "  pair: repulsion, strength F0 %.4g kT/a, decay tau %.4g /a, min gap %.3g a, cut-off gap %.4g a%s\n",
+                     p.repulsion_strength, p.repulsion_decay, p.min_gap, hc, how);
+        break;
       case PairForceParams::Kind::harmonic:
         std::fprintf(out, "  pair: harmonic, stiffness %.4g kT/a^2, rest gap %.4g a, cut-off gap %.4g a%s\n",
                      p.harmonic_stiffness, p.harmonic_rest_gap, hc, how);
@@ -350,8 +354,11 @@ int check(Simulation& sim, const CheckOptions& opt, std::FILE* out) {
   if (s.forces.pair.empty()) std::fprintf(out, "  pair: none\n");
   if (s.fluid.kT > 0) std::fprintf(out, "  Brownian: kT = %.4g, seed %llu\n", s.fluid.kT, (unsigned long long)s.seed);
   else std::fprintf(out, "  Brownian: none (kT = 0)\n");
-  if (s.flow.kind != FlowParams::Kind::none)
-    std::fprintf(out, "  ambient flow: %s, rate %.4g /time\n", name_of(s.flow.kind), s.flow.rate);
+  if (s.flow.kind != FlowParams::Kind::none) {
+    char pe[96] = "";
+    if (s.flow.peclet != 0.0) std::snprintf(pe, sizeof pe, " (from peclet %.4g = 6 pi mu a^3 rate / kT)", s.flow.peclet);
+    std::fprintf(out, "  ambient flow: %s, rate %.4g /time%s\n", name_of(s.flow.kind), s.flow.rate, pe);
+  }
 
   // Outputs.
   const long long frames = s.time.steps / s.output.every + 1 + (s.time.steps % s.output.every != 0 ? 1 : 0);

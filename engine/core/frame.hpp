@@ -44,6 +44,7 @@ inline const std::string velocity = "kT mu-1 a-2";
 inline const std::string angular_velocity = "kT mu-1 a-3";
 inline const std::string force = "kT a-1";
 inline const std::string energy = "kT";  // also torque and stresslet
+inline const std::string stress = "kT a-3";
 }  // namespace units
 
 struct Field {

@@ -22,7 +22,7 @@ struct FluidParams {
 // One pair-force law. Only the fields of the chosen kind are used (docs/scene.md). The laws and
 // their regularisation are stated in engine/pair_forces.hpp.
 struct PairForceParams {
-  enum class Kind { morse, dlvo, hertz, harmonic } kind = Kind::morse;
+  enum class Kind { morse, dlvo, hertz, harmonic, repulsion } kind = Kind::morse;
   double cutoff = 0.0;  // surface-gap cutoff h = r - a_i - a_j beyond which the force is zero [a]; 0 = law's default
                         // (energy shifted to vanish there; default from forces::default_cutoff)
   // Morse (Lee et al. 2024 [L24] eq. 2.17): phi = -V0 [2 exp(-kappa h) - exp(-2 kappa h)]
@@ -49,13 +49,17 @@ struct PairForceParams {
   // Harmonic spring on the surface gap: U = (k/2) (h - h_0)^2 (engine/pair_forces.hpp).
   double harmonic_stiffness = 100.0;  // k [kT / a^2]
   double harmonic_rest_gap = 0.0;     // h_0 [a]
+  // Short-range repulsion of hard-sphere rheology (engine/pair_forces.hpp):
+  // |F| = F0 tau a e^{-tau h} / (1 - e^{-tau h}), a = 1, floored below min_gap like DLVO.
+  double repulsion_strength = 1.0;   // F0 [kT/a]
+  double repulsion_decay = 1000.0;   // tau [1/a]
 };
 
 template <>
 struct Names<PairForceParams::Kind> {
-  static constexpr NameTable<PairForceParams::Kind, 4> table{
+  static constexpr NameTable<PairForceParams::Kind, 5> table{
       {{PairForceParams::Kind::morse, "morse"}, {PairForceParams::Kind::dlvo, "dlvo"}, {PairForceParams::Kind::hertz, "hertz"},
-       {PairForceParams::Kind::harmonic, "harmonic"}}};
+       {PairForceParams::Kind::harmonic, "harmonic"}, {PairForceParams::Kind::repulsion, "repulsion"}}};
 };
 template <>
 struct Names<PairForceParams::DoubleLayer> {
@@ -72,6 +76,9 @@ struct ForceParams {
 struct FlowParams {
   enum class Kind { none, simple_shear, planar_extension } kind = Kind::none;
   double rate = 0.0;  // shear or extension rate [1/time]
+  // Peclet number Pe = 6 pi mu a^3 rate / kT (a = 1, the reference radius; docs/rheology.md), when
+  // the scene gave it instead of `rate` (0 = not given); `rate` then holds Pe kT / (6 pi mu).
+  double peclet = 0.0;
 };
 
 template <>
@@ -128,7 +135,9 @@ struct TimeParams {
   std::int64_t start_step = 0;  // step and time of the initial state (a continued run: the file's last frame)
   double start_time = 0.0;
   std::int64_t last_step() const { return start_step + steps; }
-  std::string integrator = "euler";  // a registered integrator (engine/methods.cpp)
+  // "auto": the model chooses (fixman where Brownian motion needs the thermal drift, else euler;
+  // engine/model.cpp), or a registered integrator (engine/methods.cpp).
+  std::string integrator = "auto";
   double rkf_tolerance = 1e-6;  // local error per step for rkf45 [a]
 };
 
