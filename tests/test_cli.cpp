@@ -363,3 +363,85 @@ TEST_CASE("plot writes one PNG of a short periodic run") {
   const Result bad = cli("plot " + scene.string() + " --out " + (scratch() / "bad.png").string());
   CHECK(bad.status == 4);
 }
+
+TEST_CASE("average: the window in strain, time or fractions selects the frames; the mean is theirs; errors") {
+  // Two spheres in simple shear (rate 2) in a periodic box, far field FTS, 20 steps of 0.05, a
+  // frame per step: strain 2 t, frames at t = 0, 0.05, ..., 1.
+  const fs::path scene = write_scene("avg.toml", R"([domain]
+kind = "periodic"
+box = [10, 10, 10]
+[particles]
+positions = [[0.0, 0.0, 0.0], [2.6, 0.5, 0.0]]
+[flow]
+kind = "simple_shear"
+rate = 2.0
+[hydrodynamics]
+model = "far_field"
+moments = "FTS"
+[time]
+dt = 0.05
+steps = 20
+)");
+  const std::string h5 = (scratch() / "avg.h5").string();
+  REQUIRE(cli("run " + scene.string() + " --out " + h5 + " --quiet").status == 0);
+  const std::vector<double> t = test::read_doubles(h5, "observables/relative_viscosity/time");
+  const std::vector<double> eta = test::read_doubles(h5, "observables/relative_viscosity/value");
+  REQUIRE(t.size() == 21);
+  auto mean_where = [&](double lo, double hi) {
+    double s = 0;
+    int n = 0;
+    for (std::size_t k = 0; k < t.size(); ++k)
+      if (t[k] >= lo - 1e-12 && t[k] <= hi + 1e-12) {
+        s += eta[k];
+        ++n;
+      }
+    return std::make_pair(s / n, n);
+  };
+  auto row = [](const std::string& out, const std::string& name) {
+    std::istringstream in(out);
+    for (std::string line; std::getline(in, line);) {
+      std::istringstream w(line);
+      std::string first;
+      w >> first;
+      if (first == name) {
+        double mean = 0, se = 0;
+        long n = 0;
+        w >> mean >> se >> n;
+        return std::make_pair(mean, n);
+      }
+    }
+    return std::make_pair(std::nan(""), -1L);
+  };
+  // Strain 0.5 ... 1.5 is t = 0.25 ... 0.75: frames 5 ... 15.
+  const Result s = cli("average " + h5 + " --strain 0.5:1.5 --observables relative_viscosity,N1");
+  REQUIRE(s.status == 0);
+  const auto [m_strain, n_strain] = mean_where(0.25, 0.75);
+  CHECK(row(s.out, "relative_viscosity").second == n_strain);
+  CHECK(row(s.out, "relative_viscosity").first == doctest::Approx(m_strain).epsilon(1e-7));
+  CHECK(row(s.out, "N1").second == n_strain);
+  CHECK(!contains(s.out, "stress_fluid"));  // only the observables asked for
+  const Result ti = cli("average " + h5 + " --time 0.25:0.75 --observables relative_viscosity");
+  CHECK(row(ti.out, "relative_viscosity").first == doctest::Approx(m_strain).epsilon(1e-7));
+  // Default: the second half of the recorded time.
+  const Result d = cli("average " + h5);
+  REQUIRE(d.status == 0);
+  const auto [m_half, n_half] = mean_where(0.5, 1.0);
+  CHECK(row(d.out, "relative_viscosity").second == n_half);
+  CHECK(row(d.out, "relative_viscosity").first == doctest::Approx(m_half).epsilon(1e-7));
+  CHECK(contains(d.out, "stress_hydrodynamic[1]"));
+  // Errors: usage (1), an unknown observable or a strain window without shear (2), no file (4).
+  CHECK(cli("average " + h5 + " --strain 2:1").status == 1);
+  CHECK(contains(cli("average " + h5 + " --strain 1:x").err, "expected A:B"));
+  CHECK(cli("average " + h5 + " --strain 0:1 --time 0:1").status == 1);
+  CHECK(cli("average " + h5 + " --window 0.5:2").status == 1);
+  const Result unknown = cli("average " + h5 + " --observables viscosity");
+  CHECK(unknown.status == 2);
+  CHECK(contains(unknown.err, "no observable \"viscosity\""));
+  const fs::path still = write_scene("still.toml", "[particles]\npositions = [[0,0,0]]\n[time]\nsteps = 2\n");
+  const std::string h5s = (scratch() / "still.h5").string();
+  REQUIRE(cli("run " + still.string() + " --out " + h5s + " --quiet").status == 0);
+  const Result ns = cli("average " + h5s + " --strain 0:1");
+  CHECK(ns.status == 2);
+  CHECK(contains(ns.err, "--strain needs a run in simple shear"));
+  CHECK(cli("average " + (scratch() / "missing.h5").string()).status == 4);
+}

@@ -2,6 +2,7 @@
 
 #include "engine/app/check.hpp"
 #include "engine/app/run.hpp"
+#include "engine/app/average.hpp"
 #include "engine/app/sweep.hpp"
 #include "engine/core/errors.hpp"
 #include "engine/progress.hpp"
@@ -223,7 +224,7 @@ int main_cli(int argc, char** argv) {
   const std::string version = std::string("stokesian ") + build::version + " (" + build::git + ", " + build::compiler +
                               ", " + build::build_type + ")";
   app.set_version_flag("--version", version, "Print the version and build, then exit");
-  app.require_subcommand(1);  // one of run, solve, check, plot, sweep
+  app.require_subcommand(1);  // one of run, solve, check, plot, sweep, average
   app.footer(
       "Exit status: 0 success, 1 usage, 2 scene/config error (also: more memory than available), 3 physics error,\n"
       "4 file error, 5 out of memory although the estimate fitted, 6 a sweep ended with failed or unfinished runs.\n"
@@ -324,6 +325,19 @@ int main_cli(int argc, char** argv) {
   sweep_cmd->add_flag("--retry-failed", sweep_opt.retry_failed, "Run failed runs again (resuming from their checkpoints)");
   sweep_cmd->add_flag("--quiet", sweep_opt.quiet, "No progress lines");
 
+  CLI::App* average_cmd = app.add_subcommand(
+      "average", "Time averages of a trajectory's observables over a strain, time or fraction window, with blocked errors");
+  std::string average_file, strain_text, time_text, window_text, observables_text;
+  average_cmd->add_option("trajectory", average_file, "Trajectory written by run")->required()->type_name("FILE.h5");
+  average_cmd->add_option("--strain", strain_text, "Window in accumulated shear strain rate*t (simple shear runs)")
+      ->type_name("A:B");
+  average_cmd->add_option("--time", time_text, "Window in time")->type_name("A:B");
+  average_cmd->add_option("--window", window_text, "Window as fractions of the recorded time span")
+      ->type_name("A:B")
+      ->default_str("0.5:1");
+  average_cmd->add_option("--observables", observables_text, "Comma-separated observable names; default all")
+      ->type_name("NAMES");
+
   // A first word that is neither an option nor a command: name it (CLI11 would only say that a
   // command is required).
   const auto is_command = [&](const char* w) {
@@ -332,7 +346,7 @@ int main_cli(int argc, char** argv) {
     return false;
   };
   if (argc > 1 && argv[1][0] != '-' && !is_command(argv[1])) {
-    std::fprintf(stderr, "stokesian: unknown command \"%s\"; commands: run, solve, check, plot, sweep\n%s", argv[1],
+    std::fprintf(stderr, "stokesian: unknown command \"%s\"; commands: run, solve, check, plot, sweep, average\n%s", argv[1],
                  "Run `stokesian --help` for usage.\n");
     return 1;
   }
@@ -354,6 +368,27 @@ int main_cli(int argc, char** argv) {
     plot_req.frame = std::stol(frame_text);
     plot_req.projection = projection;
     return plot(plot_req);
+  }
+  if (average_cmd->parsed()) {
+    AverageOptions opt;
+    const int windows = !strain_text.empty() + !time_text.empty() + !window_text.empty();
+    try {
+      if (windows > 1) throw std::invalid_argument("give one of --strain, --time and --window");
+      if (!strain_text.empty()) parse_window("--strain", strain_text, opt);
+      if (!time_text.empty()) parse_window("--time", time_text, opt);
+      if (!window_text.empty()) parse_window("--window", window_text, opt);
+    } catch (const std::invalid_argument& e) {
+      std::fprintf(stderr, "stokesian: average: %s\n", e.what());
+      return 1;
+    }
+    for (std::size_t p = 0; !observables_text.empty() && p <= observables_text.size();) {
+      const std::size_t q = std::min(observables_text.find(',', p), observables_text.size());
+      if (q > p) opt.observables.push_back(observables_text.substr(p, q - p));
+      p = q + 1;
+    }
+    Activity activity;
+    activity.doing = "averaging";
+    return guarded(activity, [&]() -> int { return app::average(average_file, opt, stdout); });
   }
   if (sweep_cmd->parsed()) {
     sweep_opt.jobs = std::stoi(jobs_text);
