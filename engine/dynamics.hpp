@@ -22,6 +22,9 @@ struct Evaluation {
   HydroResult hydro;                // velocities etc. (deterministic part)
   forces::PairForceTotals pair;     // pair energy and virial
   std::optional<GapStats> gaps;     // computed in the step's task graph at output steps
+  // The state is at a frame step (Simulation::frame_step; also when its frame was written before a
+  // resume): the step from it samples the Brownian stresslet (engine/stress.hpp).
+  bool leaves_frame = false;
 };
 
 class Dynamics {
@@ -40,6 +43,9 @@ class Dynamics {
   // Brownian force xi of covariance (2 kT / dt) R at the positions of s (engine/brownian.hpp,
   // generalised layout of the model's moments); empty when athermal.
   virtual VecX brownian_force(const State& s, double dt, Rng& rng) = 0;
+  // The response to the force xi alone (no other loads, no ambient flow) at positions x and time t
+  // into the step of s: U = R^{-1} xi and the stresslets A xi, A = dS/dF (engine/stress.hpp).
+  virtual HydroResult noise_response(const State& s, const std::vector<Vec3>& x, double t, const VecX& xi) = 0;
 };
 
 }  // namespace stokesian

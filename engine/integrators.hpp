@@ -32,8 +32,9 @@ struct StepResult {
   std::vector<Vec3> x;  // new positions
   double dt_used = 0;   // the step that was taken
   double dt_next = 0;   // proposal for the next step
-  // fixman with noise at FTS: sum_i [S_i(x'; F(x') + xi) - S_i(x0; F(x0) + xi)], whose mean is the
-  // negative Brownian stresslet sum, kT div(R_SU R_FU^{-1}) + O(dt) (engine/stress.hpp).
+  // fixman with noise at FTS, on steps that leave a frame: sum_i [(A(x') - A(x0)) xi]_i,
+  // A xi the stresslets of the response to xi alone, whose mean is the negative Brownian stresslet
+  // sum, kT div(R_SU R_FU^{-1}) + O(dt) (engine/stress.hpp).
   std::optional<Mat3> brownian_stresslet;
 };
 

@@ -127,8 +127,8 @@ class BulkStress final : public Observer {
     in.brownian = brownian_;
     in.kT = kT_;
     if (brownian_stresslet_) {
-      if (s.window_steps > 0) in.brownian_stresslet = s.brownian_stresslet_sum / double(s.window_steps);
-      f.set_count("brownian_window_steps", s.window_steps);
+      if (s.brownian_samples > 0) in.brownian_stresslet = s.brownian_stresslet_sum / double(s.brownian_samples);
+      f.set_count("brownian_samples", s.brownian_samples);
     }
     for (const StressPart& p : bulk_stress(in)) {
       const std::string suffix = p.name == "total" ? "" : "_" + p.name;

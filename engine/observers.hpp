@@ -13,7 +13,7 @@
 //   observables:  overlaps (integer), min_gap (the smallest surface gap of any pair, nearest periodic
 //                 image; +inf for a single particle), pair_energy, krylov_iterations (integer), dt,
 //                 stresslet_sum (FTS: sum of the stresslets, 6 components); periodic boxes: stress and
-//                 stress_<part> (engine/stress.hpp), brownian_window_steps, and in simple shear
+//                 stress_<part> (engine/stress.hpp), brownian_samples, and in simple shear
 //                 relative_viscosity[_<part>], N1[_<part>], N2[_<part>] (docs/output.md).
 #include "engine/core/frame.hpp"
 #include "engine/core/registry.hpp"

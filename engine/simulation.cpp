@@ -196,6 +196,17 @@ VecX Simulation::brownian_force(const State& s, double dt, Rng& rng) {
   }
 }
 
+HydroResult Simulation::noise_response(const State& s, const std::vector<Vec3>& x, double t, const VecX& xi) {
+  const Domain domain = strain_rate_ == 0.0 || t == 0.0 ? s.domain : s.domain.strained_by(strain_rate_ * t);
+  const Configuration c{x, s.radius, domain};
+  try {
+    hydro_.prepare(c);  // the stage's set-up, kept from its evaluation
+    return hydro_.noise_velocity(c, s.fixed, xi);
+  } catch (const PhysicsError& e) {
+    throw PhysicsError("step " + std::to_string(s.step) + ": " + e.what() + closest_pairs(x, s.radius, domain));
+  }
+}
+
 std::vector<Vec3> Simulation::brownian_displacement(const State& s, double dt, Rng& rng) {
   if (!model_.brownian) return {};
   std::vector<Vec3> dX;
@@ -227,8 +238,10 @@ void Simulation::advance(State& s, const Evaluation& ev) {
   Rng rng = legacy_noise_ ? RandomStream::continuing_legacy(*legacy_noise_)
                           : RandomStream::for_purpose(scene_.seed, Purpose::brownian, std::uint64_t(s.step));
   StepResult r = integrator_->step(s, ev, *this, rng);
-  s.window_steps += 1;
-  if (r.brownian_stresslet) s.brownian_stresslet_sum += *r.brownian_stresslet;
+  if (r.brownian_stresslet) {
+    s.brownian_stresslet_sum += *r.brownian_stresslet;
+    s.brownian_samples += 1;
+  }
   s.position = std::move(r.x);
   s.time += r.dt_used;
   s.step += 1;
@@ -346,7 +359,7 @@ long Simulation::run(State& s, OutputSink& out, const RunControl& control) {
       latest = std::move(f);
       have_latest = true;
       // The frame has consumed the sums over the steps since the previous one.
-      s.window_steps = 0;
+      s.brownian_samples = 0;
       s.brownian_stresslet_sum.setZero();
     }
     frame_done = false;
@@ -365,6 +378,7 @@ long Simulation::run(State& s, OutputSink& out, const RunControl& control) {
                       have_latest ? latest.scalar("overlaps") : 0.0);
     before = s;
     noise_before = legacy_noise_;
+    ev.leaves_frame = frame_step(s.step);  // also for a frame written before a resume
     try {
       advance(s, ev);
     } catch (const PhysicsError& e) {

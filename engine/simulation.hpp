@@ -50,6 +50,7 @@ class Simulation final : public Dynamics {
   Evaluation evaluate(const State& s, const std::vector<Vec3>& x, double t, const VecX* noise) override;
   std::vector<Vec3> brownian_displacement(const State& s, double dt, Rng& rng) override;
   VecX brownian_force(const State& s, double dt, Rng& rng) override;
+  HydroResult noise_response(const State& s, const std::vector<Vec3>& x, double t, const VecX& xi) override;
 
   Frame frame(const State& s, const Evaluation& ev) const;
   RunHeader header() const;

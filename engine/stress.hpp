@@ -24,11 +24,13 @@
 // Fixman step (engine/integrators.hpp) gives it without extra solves: both stages are driven by
 // the same Brownian force xi of covariance (2 kT/dt) R, and the midpoint x' = x0 + (dt/2) R^{-1} xi
 // + O(dt), so
-//   E[ sum_i S_i(x'; F + xi) - S_i(x0; F + xi) ] = E[(A(x') - A(x0)) xi] + O(dt)
-//     = (dt/2) d_l A_{.k} (R^{-1})_{lm} E[xi_m xi_k] = kT d_l A_{.l} = -S^B + O(dt)
-// (summed over particles; the deterministic difference of the stages has mean O(dt)). The sample
-// is O(1) in dt, so its mean over the steps between two frames is what a frame records
-// (State::brownian_stresslet_sum), and it enters the stress with -1/V like the solve's stresslets.
+//   E[(A(x') - A(x0)) xi] = (dt/2) d_l A_{.k} (R^{-1})_{lm} E[xi_m xi_k] + O(dt)
+//     = kT d_l A_{.l} = -S^B + O(dt)
+// (summed over particles). Only the responses to xi enter the sample (two solves with xi alone):
+// the stages' full stresslets also carry A F^P + B E_inf, whose change over a step is not small on
+// average when F^P is a stiff contact force. The sample is O(1) in dt; it is taken on the step
+// that leaves each frame, recorded with the next frame (State::brownian_stresslet_sum), and enters
+// the stress with -1/V like the solve's stresslets.
 // tests/test_stress.cpp checks it against -kT div(R_SU R_FU^{-1}) from finite differences of the
 // dense Stokesian-dynamics solver.
 #include "engine/core/domain.hpp"
@@ -59,7 +61,7 @@ struct StressInput {
   Mat3 virial = Mat3::Zero(); // sum over pairs of r_ij F_ij^T [kT]
   bool brownian = false;      // kT > 0
   double kT = 0.0;
-  // mean over the window of the Fixman samples sum_i [S_i(x') - S_i(x0)] = -sum_i S^B_i [kT] (0 when unknown)
+  // mean of the Fixman samples sum_i [(A(x') - A(x0)) xi]_i, estimating -sum_i S^B_i [kT] (0 when none)
   Mat3 brownian_stresslet = Mat3::Zero();
 };
 

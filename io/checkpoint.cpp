@@ -106,7 +106,7 @@ void write_checkpoint(const std::string& path, const Checkpoint& c) {
   w.i64(c.trajectory_frames);
   // The state's window sums travel as values "state.*" (format unchanged; read back below).
   std::map<std::string, double> values = c.values;
-  if (s.window_steps != 0) values["state.window_steps"] = double(s.window_steps);
+  if (s.brownian_samples != 0) values["state.brownian_samples"] = double(s.brownian_samples);
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j)
       if (s.brownian_stresslet_sum(i, j) != 0.0)
@@ -205,8 +205,8 @@ Checkpoint read_checkpoint(const std::string& path) {
       ++it;
       continue;
     }
-    if (k == "state.window_steps") {
-      s.window_steps = std::int64_t(it->second);
+    if (k == "state.brownian_samples") {
+      s.brownian_samples = std::int64_t(it->second);
     } else if (k.rfind("state.brownian_stresslet_sum.", 0) == 0) {
       const int e = std::atoi(k.c_str() + std::strlen("state.brownian_stresslet_sum."));
       if (e < 0 || e > 8) throw IoError(path + ": checkpoint value " + k + " is not a stresslet entry (corrupt)");

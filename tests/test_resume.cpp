@@ -149,7 +149,7 @@ checkpoint_every = 10
   // The Brownian stress averages over the steps between frames (engine/stress.hpp).
   check_kill_resume(scene, {"particles/all/position/value", "particles/all/velocity/value",
                             "particles/all/stresslet/value", "observables/min_gap/value",
-                            "observables/stress_brownian/value", "observables/brownian_window_steps/value",
+                            "observables/stress_brownian/value", "observables/brownian_samples/value",
                             "observables/relative_viscosity/value"},
                     13);
 }

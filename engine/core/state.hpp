@@ -35,9 +35,9 @@ struct State {
   // Random-number generator state (Rng serialised as text) for exact restarts.
   std::string rng_state;
   // Sums over the steps taken since the last frame, for observables that average over those steps
-  // (engine/stress.hpp: the Brownian stresslet); cleared after each frame, kept by checkpoints.
-  std::int64_t window_steps = 0;
-  Mat3 brownian_stresslet_sum = Mat3::Zero();  // sum over steps of sum_i S^B_i [kT]
+  // (engine/stress.hpp: the Brownian stresslet samples); cleared after each frame, kept by checkpoints.
+  std::int64_t brownian_samples = 0;
+  Mat3 brownian_stresslet_sum = Mat3::Zero();  // sum over samples of sum_i (A(x') - A(x0)) xi [kT]
   std::size_t size() const { return position.size(); }
 };
 
