@@ -367,6 +367,19 @@ int check(Simulation& sim, const CheckOptions& opt, std::FILE* out) {
   std::fprintf(out, "output:\n  trajectory: %s, a frame every %lld steps (%lld frames); per particle: position, radius%s%s\n",
                opt.out.c_str(), static_cast<long long>(s.output.every), frames, rec.empty() ? "" : ", ", rec.c_str());
   std::fprintf(out, "    (outputs the model does not compute are not written)\n");
+  if (s.domain.periodic()) {
+    // The bulk stress's parts (engine/observers.cpp, docs/rheology.md).
+    std::string parts = "fluid";
+    if (has_stresslet(model.moments)) parts += ", hydrodynamic";
+    if (!s.forces.pair.empty()) parts += ", interparticle";
+    if (model.brownian)
+      parts += has_stresslet(model.moments) && model.integrator == "fixman" ? ", Brownian" : ", Brownian (-n kT I only: the Brownian stresslet needs FTS)";
+    if (has_stresslet(model.moments) && model.fixed_particles) parts += ", fixed particles";
+    std::fprintf(out, "  stress: %s%s\n", parts.c_str(),
+                 s.flow.kind == FlowParams::Kind::simple_shear && s.flow.rate != 0.0
+                     ? "; relative viscosity, N1 and N2 of each (`stokesian average` for time averages)"
+                     : "");
+  }
   if (s.output.checkpoint_every > 0)
     std::fprintf(out, "  checkpoint: %s.ckpt, every %lld steps and at the end\n", opt.out.c_str(),
                  static_cast<long long>(s.output.checkpoint_every));
