@@ -32,7 +32,8 @@ TEST_CASE("example scenes in configs/ are valid") {
 // smallest gap unless a force law holds it there. The number of steps is chosen per example so that
 // the unstable steps of earlier versions (sheared_suspension with dt = 0.2: smallest gap -0.03 a
 // after 10 steps, -2.4 a after 100) are caught, while the whole suite stays short: examples of more
-// than 5000 particles (the 10^4-particle accelerated-SD suspension) take 2 steps at full size.
+// than 5000 particles (the 10^4-particle accelerated-SD suspension) take 2 steps at full size, those
+// of 500 or more (the Brownian hard-sphere rheology scene) 5.
 TEST_CASE("example scenes run briefly and stay physical") {
   int count = 0;
   for (const auto& entry : std::filesystem::directory_iterator(std::string(STOKESIAN_SOURCE_DIR) + "/configs")) {
@@ -40,7 +41,7 @@ TEST_CASE("example scenes run briefly and stay physical") {
     const std::string path = entry.path().string();
     CAPTURE(path);
     Scene scene = io::load_scene(path);
-    const long steps = std::min<long>(scene.time.steps, scene.positions.size() > 5000 ? 2 : 20);
+    const long steps = std::min<long>(scene.time.steps, scene.positions.size() > 5000 ? 2 : scene.positions.size() >= 500 ? 5 : 20);
     Simulation sim(scene);
     State s = sim.initial_state();
     double min_gap = std::numeric_limits<double>::infinity();
