@@ -524,6 +524,17 @@ TEST_CASE("Result does not depend on the number of threads") {
 
 namespace {
 
+// The ConfigError message of parsing `text` ("" when it parses).
+std::string error_of(const std::string& text) {
+  try {
+    io::parse_scene(text, "bad.toml");
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+bool has(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
+
 PairForceParams harmonic_params(double k = 400.0, double h0 = 0.1) {
   PairForceParams p;
   p.kind = Kind::harmonic;
@@ -614,15 +625,6 @@ TEST_CASE("Harmonic: scene keys, defaults and errors naming file, line, key and 
   const Scene t = io::parse_scene(two + "stiffness = 250\nrest_gap = 0.05\n", "h.toml");
   CHECK(t.forces.pair[0].harmonic_stiffness == 250.0);
   CHECK(t.forces.pair[0].harmonic_rest_gap == 0.05);
-  auto error_of = [](const std::string& text) -> std::string {
-    try {
-      io::parse_scene(text, "bad.toml");
-    } catch (const ConfigError& e) {
-      return e.what();
-    }
-    return "";
-  };
-  auto has = [](const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; };
   std::string e = error_of(two + "stiffness = 0\n");
   CHECK(has(e, "bad.toml:5: [forces.pair.0] stiffness"));
   CHECK(has(e, "(0, 1e+12]"));
@@ -694,15 +696,6 @@ TEST_CASE("Repulsion: scene keys, defaults and errors naming file, line, key and
   // The resolved scene keeps the law.
   const Scene u = io::parse_scene(io::resolved_toml(t), "r2.toml");
   CHECK(u.forces.pair[0].repulsion_decay == 300.0);
-  auto error_of = [](const std::string& text) -> std::string {
-    try {
-      io::parse_scene(text, "bad.toml");
-    } catch (const ConfigError& e) {
-      return e.what();
-    }
-    return "";
-  };
-  auto has = [](const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; };
   std::string e = error_of(two + "decay = 0\n");
   CHECK(has(e, "bad.toml:5: [forces.pair.0] decay"));
   CHECK(has(e, "(0, 1e+08]"));

@@ -11,6 +11,7 @@
 // Hasimoto (1959) for m_self(L); Ladd (1990), J. Chem. Phys. 93, 3484, for the finite-size term.
 #include "engine/hydrodynamics.hpp"
 #include "engine/model.hpp"
+#include "hard_spheres.hpp"  // same folder
 #include "trees/placement.hpp"
 
 #include <chrono>
@@ -62,19 +63,15 @@ inline Estimate estimate(long n, double phi, int configs, int probes, std::uint6
   const double m_self = (1.0 - kHasimoto / L + 4.0 * kPi / 3.0 / (L * L * L)) / (6.0 * kPi);
   std::vector<double> per_config, raw;
   for (int k = 0; k < configs; ++k) {
-    PlacementParams pp;
-    pp.count = n;
-    pp.seed = seed0 + std::uint64_t(k);
-    pp.min_gap = 1e-3;
-    pp.equilibration_sweeps = 100;
+    const std::uint64_t seed = seed0 + std::uint64_t(k);
     auto t = clock::now();
-    const Placement pl = place_particles(pp, Vec3(L, L, L));
+    const Placement pl = test::equilibrium_hard_spheres(n, L, seed);
     est.seconds_placement += since(t);
     Domain d;
     d.kind = Domain::Kind::periodic;
     d.box = pl.box;
     Hydrodynamics h(m, 1.0, AmbientFlow{}, tol), ff(mf, 1.0, AmbientFlow{}, tol);
-    std::mt19937_64 rng(1000003ULL * pp.seed + std::uint64_t(n));
+    std::mt19937_64 rng(1000003ULL * seed + std::uint64_t(n));
     std::bernoulli_distribution coin(0.5);
     const std::vector<Vec3> T(static_cast<std::size_t>(n), Vec3::Zero());
     double sum = 0.0, sum_raw = 0.0;

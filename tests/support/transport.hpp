@@ -16,6 +16,7 @@
 // (Carnahan-Starling compressibility); eta'_inf here is the value measured in the same run.
 #include "engine/hydrodynamics.hpp"
 #include "engine/model.hpp"
+#include "hard_spheres.hpp"  // same folder
 #include "trees/placement.hpp"
 
 #include <chrono>
@@ -110,13 +111,8 @@ inline Estimate estimate(long n, double phi, int configs, std::uint64_t seed0, d
   Estimate est;
   est.L = std::cbrt(double(n) * 4.0 / 3.0 * kPi / phi);
   for (int k = 0; k < configs; ++k) {
-    PlacementParams pp;
-    pp.count = n;
-    pp.seed = seed0 + std::uint64_t(k);
-    pp.min_gap = 1e-3;
-    pp.equilibration_sweeps = 100;
     auto t = clock::now();
-    const Placement pl = place_particles(pp, Vec3(est.L, est.L, est.L));
+    const Placement pl = test::equilibrium_hard_spheres(n, est.L, seed0 + std::uint64_t(k));
     est.seconds_placement += since(t);
     t = clock::now();
     const Sample s = measure(pl.position, pl.radius, pl.box, tol, level);
