@@ -22,9 +22,9 @@ struct Evaluation {
   HydroResult hydro;                // velocities etc. (deterministic part)
   forces::PairForceTotals pair;     // pair energy and virial
   std::optional<GapStats> gaps;     // computed in the step's task graph at output steps
-  // The state is at a frame step (Simulation::frame_step; also when its frame was written before a
-  // resume): the step from it samples the Brownian stresslet (engine/stress.hpp).
-  bool leaves_frame = false;
+  // The step from this state samples the Brownian stresslet (engine/stress.hpp; every
+  // [brownian] stress_every steps where the stress is recorded: Simulation::samples_brownian_stress).
+  bool sample_brownian_stress = false;
 };
 
 class Dynamics {

@@ -104,9 +104,8 @@ StepResult FixmanIntegrator::step(const State& s, const Evaluation& start, Dynam
   // The responses to xi alone are solved for at each stage right after its solve (the set-up is
   // kept): the stages' stresslets also hold A F + B E_inf, whose change over the step is O(dt) on
   // average only while sqrt(kT dt R^{-1}) is small against the scale of F; a stiff contact
-  // repulsion (F ~ F0/h) makes that change dominate. Sampled on steps that leave a frame: two
-  // solves more.
-  const bool sample = !h0.S.empty() && start.leaves_frame;
+  // repulsion (F ~ F0/h) makes that change dominate. Two solves more on the steps that sample.
+  const bool sample = !h0.S.empty() && start.sample_brownian_stress;
   const HydroResult a0 = sample ? d.noise_response(s, s.position, 0.0, xi) : HydroResult{};
   const std::vector<Vec3> xmid = axpy(s.position, 0.5 * dt, h0.U);
   const HydroResult h1 = d.evaluate(s, xmid, 0.5 * dt, &xi).hydro;

@@ -274,6 +274,11 @@ Frame Simulation::frame(const State& s, const Evaluation& ev) const {
   return f;
 }
 
+bool Simulation::samples_brownian_stress(std::int64_t step) const {
+  const std::int64_t every = scene_.brownian_stress_every;
+  return records_brownian_stresslet(scene_, model_) && every > 0 && (step - scene_.time.start_step) % every == 0;
+}
+
 bool Simulation::frame_step(std::int64_t step) const {
   return (step - scene_.time.start_step) % scene_.output.every == 0 || step == scene_.time.last_step();
 }
@@ -378,7 +383,7 @@ long Simulation::run(State& s, OutputSink& out, const RunControl& control) {
                       have_latest ? latest.scalar("overlaps") : 0.0);
     before = s;
     noise_before = legacy_noise_;
-    ev.leaves_frame = frame_step(s.step);  // also for a frame written before a resume
+    ev.sample_brownian_stress = samples_brownian_stress(s.step);
     try {
       advance(s, ev);
     } catch (const PhysicsError& e) {

@@ -59,6 +59,8 @@ class Simulation final : public Dynamics {
   void advance(State& s, const Evaluation& ev);
   // Steps that write a frame: every [output] every steps from the start, and the last step.
   bool frame_step(std::int64_t step) const;
+  // The step from `step` samples the Brownian stresslet ([brownian] stress_every).
+  bool samples_brownian_stress(std::int64_t step) const;
 
   // Steps s to the scene's last step, recording every output step and checkpointing; returns the
   // number of steps taken by this call.

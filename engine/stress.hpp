@@ -28,9 +28,9 @@
 //     = kT d_l A_{.l} = -S^B + O(dt)
 // (summed over particles). Only the responses to xi enter the sample (two solves with xi alone):
 // the stages' full stresslets also carry A F^P + B E_inf, whose change over a step is not small on
-// average when F^P is a stiff contact force. The sample is O(1) in dt; it is taken on the step
-// that leaves each frame, recorded with the next frame (State::brownian_stresslet_sum), and enters
-// the stress with -1/V like the solve's stresslets.
+// average when F^P is a stiff contact force. The sample is O(1) in dt; it is taken every
+// [brownian] stress_every steps, the samples since a frame are averaged in the next frame
+// (State::brownian_stresslet_sum), and it enters the stress with -1/V like the solve's stresslets.
 // tests/test_stress.cpp checks it against -kT div(R_SU R_FU^{-1}) from finite differences of the
 // dense Stokesian-dynamics solver.
 #include "engine/core/domain.hpp"

@@ -758,8 +758,9 @@ Scene parse_scene(const toml::table& root, const std::string& source) {
   s.hydro.lubrication_min_gap = R.number(hy, "hydrodynamics", "lubrication_min_gap", 1e-6, 1e-8, 0.1);
 
   const toml::table& br = sub(R, root, "brownian");
-  R.only(br, "brownian", {"seed"});
+  R.only(br, "brownian", {"seed", "stress_every"});
   s.seed = std::uint64_t(R.integer(br, "brownian", "seed", 1, 0, std::numeric_limits<long>::max()));
+  s.brownian_stress_every = R.integer(br, "brownian", "stress_every", 1, 0, 1000000000);
 
   const toml::table& rn = sub(R, root, "run");  // failure policy (docs/reliability.md)
   R.only(rn, "run", {"max_overlap"});
@@ -896,7 +897,7 @@ std::string resolved_toml(const Scene& s) {
   if (s.hydro.lubrication_taper_auto) hydro.insert("lubrication_taper", "auto");
   else hydro.insert("lubrication_taper", s.hydro.lubrication_taper);
   root.insert("hydrodynamics", hydro);
-  root.insert("brownian", toml::table{{"seed", int64_t(s.seed)}});
+  root.insert("brownian", toml::table{{"seed", int64_t(s.seed)}, {"stress_every", int64_t(s.brownian_stress_every)}});
   root.insert("run", toml::table{{"max_overlap", s.run.max_overlap}});
   root.insert("time", toml::table{{"dt", s.time.dt},
                                   {"steps", int64_t(s.time.steps)},

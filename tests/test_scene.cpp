@@ -451,6 +451,12 @@ TEST_CASE("syntax errors quote the line, strings are bounded, type errors give t
   CHECK(contains(e, "[output] xyz"));
   e = error_of(kTwo + "[brownian]\nseed = nan\n");
   CHECK(contains(e, "[brownian] seed: expected an integer, got a float (allowed an integer in [0, "));
+  e = error_of(kTwo + "[brownian]\nstress_every = -1\n");
+  CHECK(contains(e, "[brownian] stress_every"));
+  CHECK(contains(e, "[0, 1000000000]"));
+  CHECK(io::parse_scene(kTwo, "two.toml").brownian_stress_every == 1);
+  CHECK(io::parse_scene(io::resolved_toml(io::parse_scene(kTwo + "[brownian]\nstress_every = 7\n", "b.toml")), "r.toml")
+            .brownian_stress_every == 7);
   e = error_of(kTwo + "[time]\ndt = \"x\"\n");
   CHECK(contains(e, "[time] dt: expected a number, got a string (allowed (0, 1e+12])"));
 }

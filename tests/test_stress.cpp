@@ -15,6 +15,7 @@
 #include "engine/simulation.hpp"
 #include "engine/stress.hpp"
 #include "io/checkpoint.hpp"
+#include "engine/core/output.hpp"
 #include "io/scene_toml.hpp"
 
 #include <cmath>
@@ -184,7 +185,7 @@ BrownianStressCheck brownian_stress_check(const std::string& text, int samples) 
     }
   FixmanIntegrator fixman;
   Evaluation start = sim.evaluate(s, s.position, 0.0);
-  start.leaves_frame = true;
+  start.sample_brownian_stress = true;
   Mat3 sum = Mat3::Zero(), sq = Mat3::Zero();
   for (int k = 0; k < samples; ++k) {
     Rng rng = RandomStream::for_purpose(7, Purpose::test, std::uint64_t(k));
@@ -293,4 +294,93 @@ TEST_CASE("checkpoint: the window sums of the Brownian stress round-trip bitwise
   io::write_checkpoint(path, bad);
   CHECK_THROWS_AS(io::read_checkpoint(path), IoError);
   std::remove(path.c_str());
+}
+
+namespace {
+
+struct FrameSink final : OutputSink {
+  std::vector<Frame> frames;
+  void record(const Frame& f) override { frames.push_back(f); }
+  void checkpoint(const State&) override {}
+};
+
+// Frames of a short sheared Brownian FTS run (periodic box, accelerated SD) with the given output
+// interval and [brownian] stress_every.
+std::vector<Frame> sheared_brownian_run(int every, int stress_every) {
+  std::ostringstream o;
+  o << R"([fluid]
+kT = 1.0
+[domain]
+kind = "periodic"
+box = [9, 9, 9]
+[particles]
+generate = "random"
+volume_fraction = 0.15
+seed = 5
+[[forces.pair]]
+kind = "repulsion"
+[flow]
+kind = "simple_shear"
+peclet = 3.0
+[hydrodynamics]
+model = "stokesian"
+solver = "accelerated"
+tolerance = 1e-4
+[brownian]
+seed = 21
+stress_every = )" << stress_every << R"(
+[time]
+dt = 0.005
+steps = 12
+[output]
+every = )" << every << "\n";
+  Simulation sim(io::parse_scene(o.str(), "sampling.toml"));
+  State s = sim.initial_state();
+  FrameSink sink;
+  RunControl quiet;
+  quiet.quiet = true;
+  sim.run(s, sink, quiet);
+  return sink.frames;
+}
+
+}  // namespace
+
+TEST_CASE("[brownian] stress_every: a frame records the mean of the samples of the steps since the previous one") {
+  // Noise is keyed by step, so the trajectory does not depend on the output interval or on the
+  // sampling (the samples use extra solves, not extra random numbers). With a frame every step,
+  // frame n holds the one sample of the step n-1 -> n; coarser frames must hold the means of those.
+  const std::vector<Frame> fine = sheared_brownian_run(1, 1);
+  REQUIRE(fine.size() == 13);
+  CHECK(fine[0].scalar("brownian_samples") == 0.0);
+  // The Brownian stress of frame n without its -n kT I: -(1/V) times the sample of step n-1 -> n.
+  auto sample_part = [&](const Frame& f) -> Mat3 {
+    return stress_of(f, "stress_brownian") - stress_of(fine[0], "stress_brownian");
+  };
+  for (const auto& [every, stress_every] : std::vector<std::pair<int, int>>{{3, 1}, {4, 2}}) {
+    CAPTURE(every);
+    CAPTURE(stress_every);
+    const std::vector<Frame> coarse = sheared_brownian_run(every, stress_every);
+    REQUIRE(coarse.size() == std::size_t(12 / every + 1));
+    for (std::size_t k = 1; k < coarse.size(); ++k) {
+      const int n = int(k) * every;
+      CHECK((stress_of(coarse[k], "stress_hydrodynamic") - stress_of(fine[std::size_t(n)], "stress_hydrodynamic")).norm() <
+            1e-12 * stress_of(fine[std::size_t(n)], "stress_hydrodynamic").norm());
+      Mat3 mean = Mat3::Zero();
+      int count = 0;
+      for (int step = n - every; step < n; ++step)
+        if (step % stress_every == 0) {
+          mean += sample_part(fine[std::size_t(step + 1)]);
+          ++count;
+        }
+      mean /= count;
+      CHECK(coarse[k].scalar("brownian_samples") == double(count));
+      const Mat3 got = stress_of(coarse[k], "stress_brownian") - stress_of(fine[0], "stress_brownian");
+      CHECK((got - mean).norm() <= 1e-9 * mean.norm());
+      CHECK(mean.norm() > 0.0);
+    }
+  }
+  // 0: no samples; the Brownian stress is the osmotic -n kT I alone.
+  const std::vector<Frame> none = sheared_brownian_run(4, 0);
+  CHECK(none.back().observables.count("brownian_samples") == 0);
+  CHECK((stress_of(none.back(), "stress_brownian") - stress_of(fine[0], "stress_brownian")).norm() == 0.0);
 }
