@@ -1,15 +1,21 @@
 #!/usr/bin/python3
-"""Charts of steady-shear rheology against the Peclet number from a sweep's summary table.
+"""Charts of steady-shear rheology from a sweep's summary table, against the Peclet number or the volume fraction.
 
-    /usr/bin/python3 bench/plot_rheology.py DIR [--out FILE.png] [--json FILE.json]
+    /usr/bin/python3 bench/plot_rheology.py DIR [--out FILE.png] [--json FILE.json] [--check]
 
-DIR is the folder of `stokesian sweep` over `flow.peclet` (e.g. configs/sweeps/hard_sphere_peclet.toml,
-docs/rheology.md), whose summary.csv holds, per run, the window means and blocked standard errors
-of relative_viscosity[_part], N1[_part] and N2[_part]. Replicas of one Pe are combined: the mean of
-their means, with standard error sqrt(sum se_r^2) / R. Normal-stress differences are shown as
-N / (mu rate) with mu rate = Pe kT / (6 pi a^3) (the scene's Pe convention; kT and mu from the
-first run's scene). Published values, where tests/data/rheology_references.json holds them, are
-drawn as open symbols with their source in the legend.
+DIR is the folder of `stokesian sweep` over `flow.peclet` (Brownian suspensions, e.g.
+configs/sweeps/hard_sphere_peclet.toml) or over `particles.volume_fraction` (the non-Brownian
+limit, configs/sweeps/noncolloidal_phi.toml); docs/rheology.md. Its summary.csv holds, per run,
+the window means and blocked standard errors of relative_viscosity[_part], N1[_part] and
+N2[_part]. Replicas of one point are combined: the mean of their means, with standard error
+sqrt(sum se_r^2) / R. Normal-stress differences are shown as N / (mu rate): against Pe with
+mu rate = Pe kT / (6 pi a^3) (the scene's Pe convention; kT from the first run's scene), against
+phi with mu and rate of the first run's scene. Published values, where
+tests/data/rheology_references.json holds them (entries whose values have "Pe" or "phi" and
+"eta_r"), are drawn as open symbols with their source in the legend.
+
+The JSON also holds the published qualitative shape as named checks (shape_checks); --check
+exits 1 unless all pass (for full sweeps; the quick CI sweep is too short to show the shape).
 """
 import argparse
 import csv
@@ -28,48 +34,98 @@ PARTS = ["", "_hydrodynamic", "_brownian", "_interparticle"]
 LABEL = {"": "total", "_hydrodynamic": "hydrodynamic (+ fluid)", "_brownian": "Brownian", "_interparticle": "interparticle"}
 
 
+AXES = {"flow.peclet": ("Pe", "Pe = 6 pi mu a^3 rate / kT", True),
+        "particles.volume_fraction": ("phi", "volume fraction phi", False)}
+
+
 def load(folder):
     path = os.path.join(folder, "summary.csv") if os.path.isdir(folder) else folder
     rows = [r for r in csv.DictReader(open(path)) if r.get("status") == "done"]
     if not rows:
         sys.exit(f"plot_rheology: {path}: no finished runs")
-    if "flow.peclet" not in rows[0]:
-        sys.exit(f"plot_rheology: {path}: the sweep does not vary flow.peclet")
+    xkey = next((k for k in AXES if k in rows[0]), None)
+    if xkey is None:
+        sys.exit(f"plot_rheology: {path}: the sweep varies neither flow.peclet nor particles.volume_fraction")
     base = os.path.dirname(path)
     scene = tomllib.load(open(os.path.join(base, rows[0]["run"], "scene.toml"), "rb"))
-    kT, mu = scene["fluid"]["kT"], scene["fluid"]["viscosity"]
-    return rows, kT, mu
+    return rows, xkey, scene
 
 
-def combine(rows, column):
-    """Pe -> (mean, se, replicas) of a column over replicas."""
-    by_pe = {}
+def combine(rows, column, xkey):
+    """x -> (mean, se, replicas) of a column over replicas."""
+    by_x = {}
     for r in rows:
         m, s = r.get(column + "_mean", ""), r.get(column + "_se", "")
         if m in ("", "nan"):
             continue
-        by_pe.setdefault(float(r["flow.peclet"]), []).append((float(m), float(s) if s not in ("", "nan") else math.nan))
+        by_x.setdefault(float(r[xkey]), []).append((float(m), float(s) if s not in ("", "nan") else math.nan))
     out = {}
-    for pe, vals in sorted(by_pe.items()):
+    for x, vals in sorted(by_x.items()):
         R = len(vals)
-        out[pe] = (sum(v for v, _ in vals) / R, math.sqrt(sum(e * e for _, e in vals)) / R, R)
+        out[x] = (sum(v for v, _ in vals) / R, math.sqrt(sum(e * e for _, e in vals)) / R, R)
     return out
 
 
-def references():
+def references(xname):
     path = os.path.join(os.path.dirname(__file__), "..", "tests", "data", "rheology_references.json")
     try:
         data = json.load(open(path))
     except OSError:
         return []
     refs = []
-    for key, d in data.items():
+    for key, d in data.get("datasets", {}).items():
         if not isinstance(d, dict):
             continue
         vals = d.get("values")
-        if isinstance(vals, list) and vals and isinstance(vals[0], dict) and "Pe" in vals[0]:
+        if isinstance(vals, list) and vals and isinstance(vals[0], dict) and xname in vals[0]:
             refs.append((key, d.get("source", key), vals))
     return refs
+
+
+def shape_checks(table, xname):
+    """The published qualitative shape (docs/rheology.md), each check with the numbers it used.
+
+    Pe: shear thinning from the lowest Pe to a minimum, then thickening driven by the hydrodynamic
+    part (Foss & Brady 2000); N1 > 0 at low Pe and < 0 at high Pe; N2 < 0 everywhere.
+    phi (non-Brownian): eta_r increases with phi; N1 < 0 and N2 < 0 from phi = 0.3; |N2| > |N1| from
+    phi = 0.4 (Seto & Giusteri 2018; Wilson). A difference counts when it exceeds twice its
+    standard error."""
+    def series(name):
+        return {float(k): v for k, v in table.get(name, {}).items()}
+
+    def differs(a, b):  # a > b beyond 2 combined standard errors
+        return a[0] - b[0] > 2.0 * math.hypot(a[1], b[1])
+
+    eta, hyd = series("relative_viscosity"), series("relative_viscosity_hydrodynamic")
+    n1, n2 = series("N1_over_mu_rate"), series("N2_over_mu_rate")
+    out = {}
+    if not eta:
+        return out
+    xs = sorted(eta)
+    if xname == "Pe":
+        xmin = min(xs, key=lambda x: eta[x][0])
+        out["shear_thinning"] = {"pass": xmin != xs[0] and differs(eta[xs[0]], eta[xmin]),
+                                 "eta_at_lowest_Pe": eta[xs[0]], "Pe_of_minimum": xmin, "eta_at_minimum": eta[xmin]}
+        out["hydrodynamic_thickening"] = {
+            "pass": xmin != xs[-1] and differs(eta[xs[-1]], eta[xmin]) and bool(hyd) and differs(hyd[xs[-1]], hyd[xmin]),
+            "eta_at_highest_Pe": eta[xs[-1]], "hydrodynamic_at_highest_Pe": hyd.get(xs[-1]),
+            "hydrodynamic_at_minimum": hyd.get(xmin)}
+        pos = [x for x in sorted(n1) if n1[x][0] > 2 * n1[x][1]]
+        neg = [x for x in sorted(n1) if -n1[x][0] > 2 * n1[x][1]]
+        out["N1_changes_sign"] = {"pass": bool(pos) and bool(neg) and max(pos) < min(neg), "Pe_N1_positive": pos,
+                                  "Pe_N1_negative": neg}
+        out["N2_negative"] = {"pass": bool(n2) and all(v[0] < 0 for v in n2.values()),
+                              "N2_over_mu_rate": {str(x): n2[x] for x in sorted(n2)}}
+    else:
+        out["eta_increases_with_phi"] = {"pass": all(differs(eta[b], eta[a]) for a, b in zip(xs, xs[1:])),
+                                         "eta": {str(x): eta[x] for x in xs}}
+        dense = [x for x in sorted(n1) if x >= 0.3 - 1e-9]
+        out["N1_N2_negative_from_phi_0.3"] = {
+            "pass": bool(dense) and all(n1[x][0] < 0 and x in n2 and n2[x][0] < 0 for x in dense), "phi": dense}
+        denser = [x for x in dense if x >= 0.4 - 1e-9]
+        out["N2_dominates_from_phi_0.4"] = {"pass": bool(denser) and all(abs(n2[x][0]) > abs(n1[x][0]) for x in denser),
+                                           "phi": denser}
+    return out
 
 
 def main():
@@ -77,41 +133,49 @@ def main():
     ap.add_argument("folder")
     ap.add_argument("--out", default="bench/results/rheology.png")
     ap.add_argument("--json", default="")
+    ap.add_argument("--check", action="store_true", help="exit 1 unless every shape check passes (full sweeps)")
     a = ap.parse_args()
-    rows, kT, mu = load(a.folder)
+    rows, xkey, scene = load(a.folder)
+    xname, xlabel, logx = AXES[xkey]
+    fluid, flow = scene.get("fluid", {}), scene.get("flow", {})
+    kT, mu = fluid.get("kT", 0.0), fluid.get("viscosity", 1.0)
+
+    def mu_rate(x):
+        return x * kT / (6 * math.pi) if xname == "Pe" else mu * flow["rate"]
+
     table = {}
     fig, ax = plt.subplots(1, 2, figsize=(11, 4.3))
     for part in PARTS:
-        c = combine(rows, "relative_viscosity" + part)
+        c = combine(rows, "relative_viscosity" + part, xkey)
         if not c:
             continue
-        pe = list(c)
+        xs = list(c)
         # The fluid's 1 is drawn with the hydrodynamic part, as published plots do.
-        y = [c[p][0] + (1.0 if part == "_hydrodynamic" else 0.0) for p in pe]
-        ax[0].errorbar(pe, y, yerr=[c[p][1] for p in pe], marker="o", capsize=3, label=LABEL[part])
-        table["relative_viscosity" + part] = {str(p): c[p] for p in pe}
+        y = [c[x][0] + (1.0 if part == "_hydrodynamic" else 0.0) for x in xs]
+        ax[0].errorbar(xs, y, yerr=[c[x][1] for x in xs], marker="o", capsize=3, label=LABEL[part])
+        table["relative_viscosity" + part] = {str(x): c[x] for x in xs}
     for name, style in (("N1", "s"), ("N2", "^")):
-        for part in ("", "_hydrodynamic", "_brownian"):
-            c = combine(rows, name + part)
+        for part in ("", "_hydrodynamic", "_brownian", "_interparticle"):
+            c = combine(rows, name + part, xkey)
             if not c:
                 continue
-            pe = list(c)
-            scale = [p * kT / (6 * math.pi) for p in pe]  # mu rate = Pe kT / (6 pi a^3)
-            ax[1].errorbar(pe, [c[p][0] / s for p, s in zip(pe, scale)], yerr=[c[p][1] / s for p, s in zip(pe, scale)],
+            xs = list(c)
+            scale = [mu_rate(x) for x in xs]
+            ax[1].errorbar(xs, [c[x][0] / s for x, s in zip(xs, scale)], yerr=[c[x][1] / s for x, s in zip(xs, scale)],
                            marker=style, capsize=3, ls="-" if part == "" else ":", label=f"{name} {LABEL[part]}")
-            table[name + part + "_over_mu_rate"] = {str(p): (c[p][0] / s, c[p][1] / s, c[p][2]) for p, s in zip(pe, scale)}
-    for key, source, vals in references():
-        pe = [v["Pe"] for v in vals if "eta_r" in v]
-        if pe:
-            ax[0].plot(pe, [v["eta_r"] for v in vals if "eta_r" in v], "ko", mfc="none", label=source[:40])
-    ax[0].set_xscale("log")
-    ax[0].set_xlabel("Pe = 6 pi mu a^3 rate / kT")
+            table[name + part + "_over_mu_rate"] = {str(x): (c[x][0] / s, c[x][1] / s, c[x][2]) for x, s in zip(xs, scale)}
+    for key, source, vals in references(xname):
+        pts = [v for v in vals if "eta_r" in v]
+        if pts:
+            ax[0].plot([v[xname] for v in pts], [v["eta_r"] for v in pts], "ko", mfc="none", label=source[:40])
+    for axis in ax:
+        if logx:
+            axis.set_xscale("log")
+        axis.set_xlabel(xlabel)
     ax[0].set_ylabel("relative viscosity")
     ax[0].set_title("(a) eta_r and its parts")
     ax[0].legend(fontsize=8)
-    ax[1].set_xscale("log")
     ax[1].axhline(0, color="0.6", lw=0.8)
-    ax[1].set_xlabel("Pe")
     ax[1].set_ylabel("N / (mu rate)")
     ax[1].set_title("(b) normal-stress differences")
     ax[1].legend(fontsize=7)
@@ -119,9 +183,15 @@ def main():
     fig.tight_layout()
     fig.savefig(a.out, dpi=110)
     print(f"wrote {a.out}")
+    checks = shape_checks(table, xname)
+    for name, c in checks.items():
+        print(f"{'pass' if c['pass'] else 'FAIL'}: {name}")
     if a.json:
-        json.dump({"folder": os.path.abspath(a.folder), "kT": kT, "mu": mu, "series": table}, open(a.json, "w"), indent=1)
+        json.dump({"folder": os.path.abspath(a.folder), "x": xkey, "kT": kT, "mu": mu, "series": table,
+                   "shape_checks": checks}, open(a.json, "w"), indent=1)
         print(f"wrote {a.json}")
+    if a.check and not all(c["pass"] for c in checks.values()):
+        sys.exit(1)
 
 
 if __name__ == "__main__":
