@@ -22,6 +22,7 @@ import csv
 import json
 import math
 import os
+import subprocess
 import sys
 import tomllib
 
@@ -187,8 +188,13 @@ def main():
     for name, c in checks.items():
         print(f"{'pass' if c['pass'] else 'FAIL'}: {name}")
     if a.json:
-        json.dump({"folder": os.path.abspath(a.folder), "x": xkey, "kT": kT, "mu": mu, "series": table,
-                   "shape_checks": checks}, open(a.json, "w"), indent=1)
+        try:  # the source tree the chart was made from (the runs record their scenes, not the binary)
+            git = subprocess.run(["git", "describe", "--always", "--dirty"], cwd=os.path.dirname(os.path.abspath(__file__)),
+                                 capture_output=True, text=True, check=True).stdout.strip()
+        except (OSError, subprocess.CalledProcessError):
+            git = "unknown"
+        json.dump({"git": git, "folder": os.path.abspath(a.folder), "x": xkey, "runs": len(rows), "kT": kT, "mu": mu,
+                   "series": table, "shape_checks": checks}, open(a.json, "w"), indent=1)
         print(f"wrote {a.json}")
     if a.check and not all(c["pass"] for c in checks.values()):
         sys.exit(1)
