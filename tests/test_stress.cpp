@@ -83,6 +83,39 @@ TEST_CASE("Einstein: one sphere per cubic cell, shear and planar extension; latt
   CHECK((ra[2] - 1.0) / phis[2] == doctest::Approx(3.77).epsilon(0.05));
 }
 
+TEST_CASE("simple-cubic lattice near close packing: extension along the axes diverges as the squeeze lubrication of its bonds") {
+  // High-concentration asymptote (the pairwise-lubrication argument of Nunan & Keller 1984, section
+  // on concentrated lattices, here derived directly): in planar extension E = rate diag(1, -1, 0)
+  // the x and y bonds of the lattice (spacing d = 2a + h) close or open at rate * d; two equal
+  // spheres squeezed at relative speed V carry F = (3/2) pi mu a^2 V / h (Reynolds; X^A_11 ~ 1/(4 xi)
+  // of Jeffrey & Onishi 1984). With one x bond per sphere and n = 1/d^3,
+  //   sigma_xx - 2 mu rate = n d F = (3/2) pi mu a^2 rate / (d h),  so  alpha - 1 -> 3 pi a^2 / (4 d h),
+  // with relative corrections O(xi ln xi) (the log term of X^A) and O(h) from the regular part.
+  // 64 spheres (4 x 4 x 4 cells: the lubrication range, 4 a, fits in half the box), dense SD, FTS.
+  std::vector<double> ratio;
+  for (double h : {1e-2, 1e-3, 1e-4}) {
+    const double d = 2.0 + h, L = 4.0 * d;
+    std::ostringstream o;
+    o << "[domain]\nkind = \"periodic\"\nbox = [" << L << ", " << L << ", " << L << "]\n[particles]\npositions = [";
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 4; ++j)
+        for (int k = 0; k < 4; ++k) o << (i + j + k ? ", " : "") << "[" << i * d << ", " << j * d << ", " << k * d << "]";
+    o << "]\n[flow]\nkind = \"planar_extension\"\nrate = 0.7\n[hydrodynamics]\nmodel = \"stokesian\"\nsolver = \"dense\"\n"
+      << "moments = \"FTS\"\ntolerance = 1e-10\n";
+    const Frame f = first_frame(o.str());
+    const double alpha = stress_of(f, "stress")(0, 0) / (2.0 * 0.7);
+    ratio.push_back((alpha - 1.0) / (3.0 * kPi / (4.0 * d * h)));
+    const double phi = 4.0 * kPi / 3.0 / (d * d * d);
+    MESSAGE("SC lattice h = " << h << " (phi = " << phi << "): alpha = " << alpha << ", (alpha - 1) / asymptote = " << ratio.back());
+    // Cubic symmetry: the yy response mirrors xx, zz carries none beyond the fluid's.
+    CHECK(stress_of(f, "stress")(1, 1) == doctest::Approx(-stress_of(f, "stress")(0, 0)).epsilon(1e-8));
+  }
+  CHECK(std::abs(ratio[1] - 1.0) < 0.03);
+  CHECK(std::abs(ratio[2] - 1.0) < 0.005);
+  CHECK(std::abs(ratio[2] - 1.0) < std::abs(ratio[1] - 1.0));
+  CHECK(std::abs(ratio[1] - 1.0) < std::abs(ratio[0] - 1.0));
+}
+
 TEST_CASE("Einstein: dilute random suspension, eta - 1 = 2.5 phi (1 + 2 phi) within 1 % at phi = 0.002 and 0.01") {
   // 60 spheres placed at random (hard-sphere RSA) in a periodic box, full Stokesian dynamics.
   // Reference: the O(phi^2) term of the high-frequency viscosity of random hard spheres,
