@@ -2,10 +2,14 @@
 //  - Einstein: one sphere per periodic cell (simple cubic lattice) and dilute random suspensions,
 //    eta - 1 = 2.5 phi (Einstein 1906) in shear (the relative_viscosity observable) and in planar
 //    extension (sigma_xx / (2 mu rate), the cubic viscosity alpha of Nunan & Keller 1984);
+//  - near close packing, the extensional viscosity of the simple cubic lattice follows the
+//    squeeze-lubrication asymptote alpha - 1 -> 3 pi a^2 / (4 d h);
 //  - the interparticle stress equals -(1/V) sum r_ij F_ij summed by hand over the pairs;
 //  - the Brownian stresslet of the Fixman step, averaged over independent draws at one
 //    configuration, equals -kT div(R_SU R_FU^{-1}) from central differences of the dense
-//    Stokesian-dynamics solve (the slow reference), entry by entry within its standard error.
+//    Stokesian-dynamics solve (the slow reference), entry by entry within its standard error;
+//  - a frame's Brownian stress is the mean of the samples of the steps since the previous frame
+//    ([brownian] stress_every), against a run with a frame every step.
 #include <doctest/doctest.h>
 
 #include "engine/core/errors.hpp"
