@@ -325,6 +325,21 @@ ResolvedModel resolve_model(const Scene& s) {
                       " needs for the right equilibrium; use \"fixman\"");
     }
   }
+  // Brownian stress (engine/stress.hpp): recorded in periodic boxes with FTS and the Fixman step.
+  if (s.domain.periodic() && m.brownian && m.moments == Moments::FTS && m.integrator == "fixman") {
+    if (s.brownian_stress_every >= 0) {
+      m.brownian_stress_every = long(s.brownian_stress_every);
+      m.reasons.push_back("Brownian stress: [brownian] stress_every = " + std::to_string(m.brownian_stress_every) +
+                          (m.brownian_stress_every ? " (two solves more on each sampled step)" : ": not sampled"));
+    } else {
+      const bool flow = s.flow.kind != FlowParams::Kind::none;
+      m.brownian_stress_every = flow ? 1 : 0;
+      m.reasons.push_back(flow ? "auto Brownian stress: ambient flow -> sampled every step for the viscosity (two solves "
+                                 "more per step; [brownian] stress_every = 0 to skip)"
+                               : "auto Brownian stress: no ambient flow -> not sampled ([brownian] stress_every = 1 to "
+                                 "sample it every step)");
+    }
+  }
   if (m.brownian && !integ->stochastic)
     unavailable(s, "time", "integrator", "\"" + integ->name + "\" is deterministic; with fluid.kT > 0 use " +
                                              [] {

@@ -102,7 +102,7 @@ class StressletSum final : public Observer {
 
 bool records_brownian_stresslet(const Scene& scene, const ResolvedModel& m) {
   return scene.domain.periodic() && m.brownian && has_stresslet(m.moments) && m.integrator == "fixman" &&
-         scene.brownian_stress_every > 0;
+         m.brownian_stress_every > 0;
 }
 
 namespace {

@@ -760,7 +760,14 @@ Scene parse_scene(const toml::table& root, const std::string& source) {
   const toml::table& br = sub(R, root, "brownian");
   R.only(br, "brownian", {"seed", "stress_every"});
   s.seed = std::uint64_t(R.integer(br, "brownian", "seed", 1, 0, std::numeric_limits<long>::max()));
-  s.brownian_stress_every = R.integer(br, "brownian", "stress_every", 1, 0, 1000000000);
+  if (const toml::node* n = R.get(br, "brownian", "stress_every"); n && n->is_string()) {
+    if (n->value_exact<std::string>() != "auto")
+      R.fail(n, "[brownian] stress_every",
+             "\"" + *n->value_exact<std::string>() + "\" is not \"auto\" or an integer (allowed: \"auto\" or an integer in [0, 1000000000])");
+    s.brownian_stress_every = -1;
+  } else {
+    s.brownian_stress_every = R.integer(br, "brownian", "stress_every", -1, 0, 1000000000);
+  }
 
   const toml::table& rn = sub(R, root, "run");  // failure policy (docs/reliability.md)
   R.only(rn, "run", {"max_overlap"});
@@ -897,7 +904,10 @@ std::string resolved_toml(const Scene& s) {
   if (s.hydro.lubrication_taper_auto) hydro.insert("lubrication_taper", "auto");
   else hydro.insert("lubrication_taper", s.hydro.lubrication_taper);
   root.insert("hydrodynamics", hydro);
-  root.insert("brownian", toml::table{{"seed", int64_t(s.seed)}, {"stress_every", int64_t(s.brownian_stress_every)}});
+  toml::table brownian{{"seed", int64_t(s.seed)}};
+  if (s.brownian_stress_every < 0) brownian.insert("stress_every", "auto");
+  else brownian.insert("stress_every", int64_t(s.brownian_stress_every));
+  root.insert("brownian", brownian);
   root.insert("run", toml::table{{"max_overlap", s.run.max_overlap}});
   root.insert("time", toml::table{{"dt", s.time.dt},
                                   {"steps", int64_t(s.time.steps)},

@@ -454,9 +454,14 @@ TEST_CASE("syntax errors quote the line, strings are bounded, type errors give t
   e = error_of(kTwo + "[brownian]\nstress_every = -1\n");
   CHECK(contains(e, "[brownian] stress_every"));
   CHECK(contains(e, "[0, 1000000000]"));
-  CHECK(io::parse_scene(kTwo, "two.toml").brownian_stress_every == 1);
-  CHECK(io::parse_scene(io::resolved_toml(io::parse_scene(kTwo + "[brownian]\nstress_every = 7\n", "b.toml")), "r.toml")
-            .brownian_stress_every == 7);
+  e = error_of(kTwo + "[brownian]\nstress_every = \"often\"\n");
+  CHECK(contains(e, "[brownian] stress_every: \"often\" is not \"auto\" or an integer"));
+  CHECK(io::parse_scene(kTwo, "two.toml").brownian_stress_every == -1);  // "auto"
+  CHECK(io::parse_scene(kTwo + "[brownian]\nstress_every = \"auto\"\n", "two.toml").brownian_stress_every == -1);
+  for (const char* v : {"7", "\"auto\""}) {
+    const Scene a = io::parse_scene(kTwo + "[brownian]\nstress_every = " + v + "\n", "b.toml");
+    CHECK(io::parse_scene(io::resolved_toml(a), "r.toml").brownian_stress_every == a.brownian_stress_every);
+  }
   e = error_of(kTwo + "[time]\ndt = \"x\"\n");
   CHECK(contains(e, "[time] dt: expected a number, got a string (allowed (0, 1e+12])"));
 }
@@ -546,4 +551,20 @@ TEST_CASE("[flow] peclet sets rate = Pe kT / (6 pi mu); refused with rate, witho
   CHECK(has(e, "needs [fluid] kT > 0"));
   e = error_of(base + "[flow]\npeclet = 10.0\n");
   CHECK(has(e, "needs a flow"));
+}
+
+TEST_CASE("[brownian] stress_every = \"auto\": the Brownian stress is sampled every step with an ambient flow, else not") {
+  const std::string box = "[fluid]\nkT = 1.0\n[domain]\nkind = \"periodic\"\nbox = [8, 8, 8]\n"
+                          "[particles]\npositions = [[0,0,0],[2.5,0,0]]\n[hydrodynamics]\nmodel = \"stokesian\"\n"
+                          "moments = \"FTS\"\n";
+  auto every = [](const std::string& text) { return resolve_model(io::parse_scene(text, "s.toml")).brownian_stress_every; };
+  CHECK(every(box) == 0);
+  CHECK(every(box + "[flow]\nkind = \"simple_shear\"\nrate = 0.1\n") == 1);
+  CHECK(every(box + "[flow]\nkind = \"simple_shear\"\nrate = 0.1\n[brownian]\nstress_every = 0\n") == 0);
+  CHECK(every(box + "[brownian]\nstress_every = 5\n") == 5);
+  // Where no stress is recorded (open domain) nothing is sampled, whatever the key says.
+  CHECK(every("[fluid]\nkT = 1.0\n[particles]\npositions = [[0,0,0],[2.5,0,0]]\n[hydrodynamics]\nmodel = \"stokesian\"\n"
+              "moments = \"FTS\"\n[brownian]\nstress_every = 1\n") == 0);
+  const std::string why = resolve_model(io::parse_scene(box + "[flow]\nkind = \"simple_shear\"\nrate = 0.1\n", "s.toml")).describe();
+  CHECK(why.find("auto Brownian stress: ambient flow -> sampled every step") != std::string::npos);
 }

@@ -176,9 +176,10 @@ struct Scene {
   FlowParams flow;
   HydroParams hydro;
   std::uint64_t seed = 1;  // Brownian random seed
-  // Steps between samples of the Brownian stresslet (engine/stress.hpp); 0: none. Sampled only
-  // where the stress is recorded (periodic box, FTS, Fixman integrator).
-  std::int64_t brownian_stress_every = 1;
+  // Steps between samples of the Brownian stresslet (engine/stress.hpp); 0: none; -1: "auto"
+  // (resolve_model: every step with an ambient flow, else none). Sampled only where the stress is
+  // recorded (periodic box, FTS, Fixman integrator).
+  std::int64_t brownian_stress_every = -1;
   TimeParams time;
   OutputParams output;
   RunPolicy run;
