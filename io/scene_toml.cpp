@@ -1003,6 +1003,13 @@ std::vector<std::string> scene_differences(const std::string& a, const std::stri
   if ((sa.time.integrator == "euler" && sb.time.integrator == "auto") ||
       (sa.time.integrator == "auto" && sb.time.integrator == "euler"))
     sa.time.integrator = sb.time.integrator = "auto";
+  // Scenes stored between [brownian] stress_every's introduction and its "auto" say 1 where none was
+  // given. "auto" samples every step with an ambient flow, and no sample is taken without thermal
+  // motion, so there the two are the same run.
+  const bool same_sampling = sa.flow.kind != FlowParams::Kind::none || sa.fluid.kT == 0.0;
+  if (same_sampling && ((sa.brownian_stress_every == 1 && sb.brownian_stress_every < 0) ||
+                        (sa.brownian_stress_every < 0 && sb.brownian_stress_every == 1)))
+    sa.brownian_stress_every = sb.brownian_stress_every = -1;
   const std::string ra = resolved_toml(sa), rb = resolved_toml(sb);
   if (ra == rb) return {};
   std::vector<std::string> out;

@@ -269,7 +269,7 @@ Sweep parse_sweep(const std::string& text, const std::string& path) {
     if (!cn || !cn->is_integer() || cn->as_integer()->get() < 1 || cn->as_integer()->get() > 10000)
       fail(path, cn ? cn : rn, "[replicas] count: required, an integer from 1 to 10000");
     sw.replicas = int(cn->as_integer()->get());
-    sw.columns.push_back("replica");
+    if (sw.replicas > 1) sw.columns.push_back("replica");  // one replica is no factor: no column
   }
 
   if (const toml::node* sn = root.get("summary")) {

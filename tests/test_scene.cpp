@@ -568,3 +568,21 @@ TEST_CASE("[brownian] stress_every = \"auto\": the Brownian stress is sampled ev
   const std::string why = resolve_model(io::parse_scene(box + "[flow]\nkind = \"simple_shear\"\nrate = 0.1\n", "s.toml")).describe();
   CHECK(why.find("auto Brownian stress: ambient flow -> sampled every step") != std::string::npos);
 }
+
+TEST_CASE("resume compatibility: a stored [brownian] stress_every = 1 equals \"auto\" where auto samples every step or nothing is sampled") {
+  const std::string base = "[particles]\npositions = [[0,0,0],[3,0,0]]\n[domain]\nkind = \"periodic\"\nbox = [9, 9, 9]\n";
+  const std::string shear = "[flow]\nkind = \"simple_shear\"\nrate = 0.1\n";
+  auto resolved = [](const std::string& text) { return io::resolved_toml(io::parse_scene(text, "s.toml")); };
+  const std::string one = "[brownian]\nstress_every = 1\n";
+  // With a flow (auto = every step) and athermal (never sampled): the same run.
+  CHECK(io::scene_differences(resolved("[fluid]\nkT = 1.0\n" + base + shear + one), resolved("[fluid]\nkT = 1.0\n" + base + shear)).empty());
+  CHECK(io::scene_differences(resolved(base + shear + one), resolved(base + shear)).empty());
+  CHECK(io::scene_differences(resolved(base + one), resolved(base)).empty());
+  // Brownian without a flow: auto samples nothing, 1 every step: different runs.
+  const auto d = io::scene_differences(resolved("[fluid]\nkT = 1.0\n" + base + one), resolved("[fluid]\nkT = 1.0\n" + base));
+  REQUIRE(d.size() == 1);
+  CHECK(d[0].find("stress_every") != std::string::npos);
+  // Other values always count.
+  CHECK(io::scene_differences(resolved("[fluid]\nkT = 1.0\n" + base + shear + "[brownian]\nstress_every = 2\n"),
+                              resolved("[fluid]\nkT = 1.0\n" + base + shear)).size() == 1);
+}

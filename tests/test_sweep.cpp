@@ -192,6 +192,30 @@ values = [0.5, 2.0]
   CHECK(error_of(p).find(p + ":3: [time] stepz: unknown key") != std::string::npos);
 }
 
+TEST_CASE("sweep: one replica is no factor; every run has a value per column") {
+  // A "replica" column without values made the summary read past the run's values (a crash when
+  // [replicas] count = 1).
+  Dir d;
+  const std::string p = d.write("s.toml", R"(base = "base.toml"
+[[grid]]
+key = "fluid.kT"
+values = [0.5, 2.0]
+[replicas]
+count = 1
+)");
+  const io::Sweep sw = io::load_sweep(p);
+  REQUIRE(sw.runs.size() == 2);
+  CHECK(sw.columns == std::vector<std::string>{"fluid.kT"});
+  for (const auto& r : sw.runs) CHECK(r.values.size() == sw.columns.size());
+  CHECK(io::parse_scene(sw.runs[0].scene, "r").seed == 1);  // replica 0 keeps the seeds
+  for (const auto& e : fs::directory_iterator(std::string(STOKESIAN_SOURCE_DIR) + "/configs/sweeps")) {
+    if (e.path().extension() != ".toml") continue;
+    CAPTURE(e.path().string());
+    const io::Sweep ex = io::load_sweep(e.path().string());
+    for (const auto& r : ex.runs) CHECK(r.values.size() == ex.columns.size());
+  }
+}
+
 // Every example sweep in configs/sweeps/ expands to valid scenes, and the first run of each takes a
 // few steps and stays finite.
 TEST_CASE("example sweeps in configs/sweeps/ are valid and their runs start") {
