@@ -159,7 +159,8 @@ def main():
             xs = list(c)
             scale = [mu_rate(x) for x in xs]
             ax[1].errorbar(xs, [c[x][0] / s for x, s in zip(xs, scale)], yerr=[c[x][1] / s for x, s in zip(xs, scale)],
-                           marker=style, capsize=3, ls="-" if part == "" else ":", label=f"{name} {LABEL[part]}")
+                           marker=style, capsize=3, ls="-" if part == "" else ":",
+                           label=f"{name} {LABEL[part].replace(' (+ fluid)', '')}")
             table[name + part + "_over_mu_rate"] = {str(x): (c[x][0] / s, c[x][1] / s, c[x][2]) for x, s in zip(xs, scale)}
     for key, source, vals in references(xname):
         pts = [v for v in vals if "eta_r" in v]
@@ -176,7 +177,7 @@ def main():
     ax[1].set_ylabel("N / (mu rate)")
     ax[1].set_title("(b) normal-stress differences")
     ax[1].legend(fontsize=7)
-    fig.suptitle(f"{os.path.abspath(a.folder)}: {len(rows)} finished runs; error bars: blocked standard errors")
+    fig.suptitle(f"{os.path.basename(os.path.abspath(a.folder))}: {len(rows)} finished runs; error bars: blocked standard errors")
     fig.tight_layout()
     fig.savefig(a.out, dpi=110)
     print(f"wrote {a.out}")
