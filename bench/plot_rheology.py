@@ -32,6 +32,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 PARTS = ["", "_hydrodynamic", "_brownian", "_interparticle"]
+COLOR = {"": "C0", "_hydrodynamic": "C1", "_brownian": "C2", "_interparticle": "C3"}
 LABEL = {"": "total", "_hydrodynamic": "hydrodynamic (+ fluid)", "_brownian": "Brownian", "_interparticle": "interparticle"}
 
 
@@ -103,6 +104,10 @@ def shape_checks(table, xname):
         return out
     xs = sorted(eta)
     if xname == "Pe":
+        if xs[0] > 1.0 or xs[-1] < 100.0 or len(xs) < 4:
+            # The shape spans Pe <= 1 to >= 100: fewer points cannot show it either way.
+            return {"not_judged": {"pass": False, "reason": "needs Pe <= 1 and >= 100 and at least 4 points",
+                                   "Pe": xs}}
         xmin = min(xs, key=lambda x: eta[x][0])
         out["shear_thinning"] = {"pass": xmin != xs[0] and differs(eta[xs[0]], eta[xmin]),
                                  "eta_at_lowest_Pe": eta[xs[0]], "Pe_of_minimum": xmin, "eta_at_minimum": eta[xmin]}
@@ -149,7 +154,7 @@ def main():
         xs = list(c)
         # The fluid's 1 is drawn with the hydrodynamic part, as published plots do.
         y = [c[x][0] + (1.0 if part == "_hydrodynamic" else 0.0) for x in xs]
-        ax[0].errorbar(xs, y, yerr=[c[x][1] for x in xs], marker="o", capsize=3, label=LABEL[part])
+        ax[0].errorbar(xs, y, yerr=[c[x][1] for x in xs], marker="o", capsize=3, color=COLOR[part], label=LABEL[part])
         table["relative_viscosity" + part] = {str(x): c[x] for x in xs}
     for name, style in (("N1", "s"), ("N2", "^")):
         for part in ("", "_hydrodynamic", "_brownian", "_interparticle"):
@@ -159,8 +164,8 @@ def main():
             xs = list(c)
             scale = [mu_rate(x) for x in xs]
             ax[1].errorbar(xs, [c[x][0] / s for x, s in zip(xs, scale)], yerr=[c[x][1] / s for x, s in zip(xs, scale)],
-                           marker=style, capsize=3, ls="-" if part == "" else ":",
-                           label=f"{name} {LABEL[part].replace(' (+ fluid)', '')}")
+                           marker=style, capsize=3, color=COLOR[part], ls="-" if name == "N1" else "--",
+                           lw=2.0 if part == "" else 1.0, label=f"{name} {LABEL[part].replace(' (+ fluid)', '')}")
             table[name + part + "_over_mu_rate"] = {str(x): (c[x][0] / s, c[x][1] / s, c[x][2]) for x, s in zip(xs, scale)}
     for key, source, vals in references(xname):
         pts = [v for v in vals if "eta_r" in v]
@@ -175,7 +180,7 @@ def main():
     ax[0].legend(fontsize=8)
     ax[1].axhline(0, color="0.6", lw=0.8)
     ax[1].set_ylabel("N / (mu rate)")
-    ax[1].set_title("(b) normal-stress differences")
+    ax[1].set_title("(b) normal-stress differences (N1 solid, N2 dashed)")
     ax[1].legend(fontsize=7)
     fig.suptitle(f"{os.path.basename(os.path.abspath(a.folder))}: {len(rows)} finished runs; error bars: blocked standard errors")
     fig.tight_layout()
