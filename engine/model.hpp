@@ -23,7 +23,8 @@ struct ResolvedModel {
   bool fixed_particles = false;
   bool drift = false;  // Brownian with a mobility that is not divergence free: fixman integrator
   // Steps between samples of the Brownian stresslet of the bulk stress, 0 = none ([brownian]
-  // stress_every resolved; sampled only where the stress records it: records_brownian_stresslet).
+  // stress_every resolved). Nonzero only where the stress records it: periodic box, Brownian FTS,
+  // Fixman integrator.
   long brownian_stress_every = 0;
   std::vector<std::string> reasons;  // one line per decision
   std::string describe() const;      // multi-line, printed by `stokesian check` and stored in outputs

@@ -98,15 +98,6 @@ class StressletSum final : public Observer {
   }
 };
 
-}  // namespace
-
-bool records_brownian_stresslet(const Scene& scene, const ResolvedModel& m) {
-  return scene.domain.periodic() && m.brownian && has_stresslet(m.moments) && m.integrator == "fixman" &&
-         m.brownian_stress_every > 0;
-}
-
-namespace {
-
 // Periodic boxes: the bulk stress by contribution (engine/stress.hpp), and in simple shear the
 // relative viscosity and normal-stress differences of each contribution.
 class BulkStress final : public Observer {
@@ -119,7 +110,7 @@ class BulkStress final : public Observer {
         fts_(has_stresslet(m.moments)),
         pairs_(!scene.forces.pair.empty()),
         brownian_(m.brownian),
-        brownian_stresslet_(records_brownian_stresslet(scene, m)) {}
+        brownian_stresslet_(m.brownian_stress_every > 0) {}  // resolve_model: periodic, FTS, fixman
   void observe(const State& s, const Evaluation& ev, Frame& f) const override {
     StressInput in;
     in.volume = s.domain.box.prod();

@@ -51,10 +51,6 @@ const Registry<ParticleOutputEntry>& particle_outputs();
 // computes. Throws ConfigError naming [output] record for an unknown name.
 std::vector<std::unique_ptr<Observer>> make_observers(const Scene& scene, const ResolvedModel& model);
 
-// The run samples the Brownian stresslet of the bulk stress (engine/stress.hpp): a periodic box,
-// Brownian FTS dynamics with the Fixman integrator, and [brownian] stress_every > 0.
-bool records_brownian_stresslet(const Scene& scene, const ResolvedModel& model);
-
 // Surface-gap statistics: overlapping pairs, and the true smallest surface gap (searched within 1 a,
 // then in doubling ranges until a pair is found; nearest periodic image). +inf for one particle.
 GapStats gap_statistics(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain);

@@ -276,7 +276,7 @@ Frame Simulation::frame(const State& s, const Evaluation& ev) const {
 
 bool Simulation::samples_brownian_stress(std::int64_t step) const {
   const std::int64_t every = model_.brownian_stress_every;
-  return records_brownian_stresslet(scene_, model_) && every > 0 && (step - scene_.time.start_step) % every == 0;
+  return every > 0 && (step - scene_.time.start_step) % every == 0;
 }
 
 bool Simulation::frame_step(std::int64_t step) const {
