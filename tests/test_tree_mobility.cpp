@@ -1,0 +1,155 @@
+// Octree Barnes-Hut far field (trees/): the Laplace derivative recurrence against closed forms and
+// finite differences, the octree's invariants, and the tree product against the direct O(N^2)
+// product (the reference, engine/kernels/far_field.hpp) for F, FT, FTS, polydisperse radii,
+// overlapping pairs, over theta and the multipole order p.
+#include <doctest/doctest.h>
+
+#include "engine/kernels/far_field.hpp"
+#include "trees/harmonic_expansion.hpp"
+#include "trees/octree.hpp"
+#include "trees/tree_mobility.hpp"
+
+#include <cmath>
+#include <random>
+
+using namespace stokesian;
+using namespace stokesian::trees;
+
+namespace {
+
+struct Cloud {
+  std::vector<Vec3> x;
+  std::vector<double> a;
+};
+
+// n spheres uniform in a cube of edge L, radii log-uniform in [a_min, a_max] (overlaps allowed).
+Cloud random_cloud(int n, double L, double a_min, double a_max, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  Cloud c;
+  for (int i = 0; i < n; ++i) {
+    c.x.emplace_back(L * u(rng), L * u(rng), L * u(rng));
+    c.a.push_back(a_min * std::pow(a_max / a_min, u(rng)));
+  }
+  return c;
+}
+
+VecX random_vector(long size, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> g;
+  VecX v(size);
+  for (long k = 0; k < size; ++k) v[k] = g(rng);
+  return v;
+}
+
+double tree_error(const Cloud& c, Moments m, const TreeParameters& p, unsigned seed = 7) {
+  const Domain open;
+  MobilitySpec spec;
+  spec.moments = m;
+  TreeFarField tree(spec, p);
+  tree.set_configuration({c.x, c.a, open});
+  const VecX in = random_vector(tree.size(), seed);
+  VecX y_tree, y_direct;
+  tree.apply(in, y_tree);
+  mobility_product(c.x, c.a, 1.0, m, in, y_direct);
+  return (y_tree - y_direct).norm() / y_direct.norm();
+}
+
+}  // namespace
+
+TEST_CASE("inverse-distance derivatives: closed forms to third order and finite differences to order 8") {
+  const MultiIndexSet set(9);
+  const Vec3 R(0.7, -1.3, 0.4);
+  std::vector<double> d(std::size_t(set.size()));
+  inverse_distance_derivatives(R, set, d.data());
+  const double r = R.norm(), x = R.x(), y = R.y(), z = R.z();
+  CHECK(d[std::size_t(set.index(0, 0, 0))] == doctest::Approx(1 / r).epsilon(1e-15));
+  CHECK(d[std::size_t(set.index(1, 0, 0))] == doctest::Approx(-x / std::pow(r, 3)).epsilon(1e-14));
+  CHECK(d[std::size_t(set.index(1, 1, 0))] == doctest::Approx(3 * x * y / std::pow(r, 5)).epsilon(1e-14));
+  CHECK(d[std::size_t(set.index(0, 0, 2))] == doctest::Approx((3 * z * z - r * r) / std::pow(r, 5)).epsilon(1e-14));
+  CHECK(d[std::size_t(set.index(1, 1, 1))] == doctest::Approx(-15 * x * y * z / std::pow(r, 7)).epsilon(1e-14));
+  CHECK(d[std::size_t(set.index(3, 0, 0))] ==
+        doctest::Approx(-15 * x * x * x / std::pow(r, 7) + 9 * x / std::pow(r, 5)).epsilon(1e-14));
+  // Each derivative of order n+1 against a central difference of the order-n ones (h^2 error).
+  const double h = 1e-4;
+  std::vector<double> dp(d.size()), dm(d.size());
+  double worst = 0;
+  for (int k = 0; k < set.size(); ++k) {
+    const auto& al = set[k];
+    if (set.total(k) >= set.order()) continue;
+    for (int c = 0; c < 3; ++c) {
+      Vec3 e = Vec3::Zero();
+      e[c] = h;
+      inverse_distance_derivatives(R + e, set, dp.data());
+      inverse_distance_derivatives(R - e, set, dm.data());
+      const double fd = (dp[std::size_t(k)] - dm[std::size_t(k)]) / (2 * h);
+      const int kk = set.plus(k, c);
+      const double exact = d[std::size_t(kk)];
+      worst = std::max(worst, std::abs(fd - exact) / (std::abs(exact) + 1e-3 * std::tgamma(set.total(k) + 2.0)));
+    }
+    (void)al;
+  }
+  CHECK(worst < 1e-6);
+  // Harmonic: the Laplacian of every derivative of order <= 7 vanishes.
+  double lap_worst = 0;
+  for (int k = 0; k < set.size(); ++k) {
+    if (set.total(k) > set.order() - 2) continue;
+    const auto& al = set[k];
+    const double lap = d[std::size_t(set.index(al[0] + 2, al[1], al[2]))] +
+                       d[std::size_t(set.index(al[0], al[1] + 2, al[2]))] +
+                       d[std::size_t(set.index(al[0], al[1], al[2] + 2))];
+    lap_worst = std::max(lap_worst, std::abs(lap) / std::abs(d[std::size_t(set.index(al[0] + 2, al[1], al[2]))] + 1e-300));
+  }
+  CHECK(lap_worst < 1e-10);
+}
+
+TEST_CASE("octree: every particle once, contiguous node ranges, radii bound the particles") {
+  const Cloud c = random_cloud(3000, 20.0, 0.5, 2.0, 3);
+  for (int leaf : {1, 8, 64}) {
+    const Octree t = build_octree(c.x, c.a, leaf);
+    std::vector<int> seen(c.x.size(), 0);
+    for (int i : t.order) ++seen[std::size_t(i)];
+    for (int s : seen) REQUIRE(s == 1);
+    for (const OctreeNode& node : t.nodes) {
+      REQUIRE(node.size() >= 1);
+      if (node.leaf()) {
+        CHECK(node.size() <= leaf);
+      } else {
+        int covered = 0;
+        for (int k = 0; k < node.child_count; ++k) {
+          const OctreeNode& ch = t.nodes[std::size_t(node.first_child + k)];
+          CHECK(ch.begin == node.begin + covered);
+          covered += ch.size();
+          CHECK(ch.level == node.level + 1);
+        }
+        CHECK(covered == node.size());
+      }
+      for (int q = node.begin; q < node.end; ++q) {
+        const std::size_t i = std::size_t(t.order[std::size_t(q)]);
+        CHECK((c.x[i] - node.centre).norm() <= node.radius * (1 + 1e-12));
+        CHECK(c.a[i] <= node.a_max);
+      }
+    }
+  }
+  // Coincident centres end in one leaf instead of recursing forever.
+  const std::vector<Vec3> same(50, Vec3(1, 2, 3));
+  const std::vector<double> radii(50, 1.0);
+  const Octree t = build_octree(same, radii, 4);
+  CHECK(t.depth < 40);
+}
+
+TEST_CASE("tree product against the direct product: error falls with theta and the order p") {
+  const Cloud c = random_cloud(1500, 40.0, 1.0, 1.0, 11);
+  for (Moments m : {Moments::F, Moments::FT, Moments::FTS}) {
+    CAPTURE(m);
+    for (int p : {0, 2, 4, 6, 8}) {
+      double previous = 1;
+      for (double theta : {0.7, 0.5, 0.3}) {
+        const double err = tree_error(c, m, {theta, p, 16});
+        MESSAGE(to_string(m) << " p=" << p << " theta=" << theta << " error=" << err);
+        CHECK(err < previous);
+        previous = err;
+      }
+    }
+  }
+}

@@ -1,0 +1,434 @@
+#include "trees/tree_mobility.hpp"
+
+#include "engine/core/sym_traceless.hpp"
+#include "engine/kernels/mobility_pair.hpp"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace stokesian::trees {
+
+namespace {
+
+int derivative_order(Moments m) { return m == Moments::FTS ? 3 : 2; }
+
+constexpr double kPi = 3.14159265358979323846;
+
+// Positions in a multi-index set of order >= 3 of the first, second and third unit derivatives.
+struct DerivativeIndex {
+  int i1[3], i2[3][3], i3[3][3][3];
+  explicit DerivativeIndex(const MultiIndexSet& set) {
+    for (int a = 0; a < 3; ++a) {
+      int e[3] = {0, 0, 0};
+      e[a] = 1;
+      i1[a] = set.index(e[0], e[1], e[2]);
+      for (int b = 0; b < 3; ++b) {
+        int f[3] = {e[0], e[1], e[2]};
+        ++f[b];
+        i2[a][b] = set.index(f[0], f[1], f[2]);
+        for (int c = 0; c < 3; ++c) {
+          int g[3] = {f[0], f[1], f[2]};
+          ++g[c];
+          i3[a][b][c] = set.index(g[0], g[1], g[2]);
+        }
+      }
+    }
+  }
+};
+
+// y (times 8 pi mu) += the responses [U, Omega, E] of a sphere of radius ai at offset R from the
+// potentials' origin, from the derivatives P[pot * nb + beta] (pot: phi_x, phi_y, phi_z, psi) of
+// the four potentials (the formulas of the header).
+void add_responses(const double* P, int nb, const DerivativeIndex& ix, const Vec3& R, double ai, Moments m,
+                   double* y) {
+  auto phi = [&](int j, int b) { return P[j * nb + b]; };
+  auto psi = [&](int b) { return P[3 * nb + b]; };
+  for (int a = 0; a < 3; ++a) {
+    double u = phi(a, 0) + psi(ix.i1[a]);
+    double divgrad = 0;
+    for (int j = 0; j < 3; ++j) {
+      u -= R[j] * phi(j, ix.i1[a]);
+      divgrad += phi(j, ix.i2[a][j]);
+    }
+    y[a] += u - (ai * ai / 3.0) * divgrad;
+  }
+  if (!has_torque(m)) return;
+  Mat3 G;  // G(k, a) = d_k u_a
+  for (int k = 0; k < 3; ++k)
+    for (int a = 0; a < 3; ++a) {
+      double g = phi(a, ix.i1[k]) - phi(k, ix.i1[a]) + psi(ix.i2[a][k]);
+      for (int j = 0; j < 3; ++j) g -= R[j] * phi(j, ix.i2[a][k]);
+      G(k, a) = g;
+    }
+  y[3] += 0.5 * (G(1, 2) - G(2, 1));
+  y[4] += 0.5 * (G(2, 0) - G(0, 2));
+  y[5] += 0.5 * (G(0, 1) - G(1, 0));
+  if (!has_stresslet(m)) return;
+  Mat3 E = 0.5 * (G + G.transpose());
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b) {
+      double t = 0;
+      for (int j = 0; j < 3; ++j) t += phi(j, ix.i3[a][b][j]);
+      E(a, b) -= (ai * ai / 5.0) * t;
+    }
+  const Vec5 e5 = to_vec5(E);
+  for (int r = 0; r < 5; ++r) y[6 + r] += e5[r];
+}
+
+// y_i += exact pair blocks of the sources j in [begin, end) of `order` (j != i).
+void add_pairs(const std::vector<int>& order, int begin, int end, int i, const std::vector<Vec3>& x,
+               const std::vector<double>& a, double mu, Moments m, const VecX& in, double* yi, long& count) {
+  const int d = dof_per_particle(m);
+  for (int q = begin; q < end; ++q) {
+    const int j = order[std::size_t(q)];
+    if (j == i) continue;
+    const Vec3 rij = x[std::size_t(i)] - x[std::size_t(j)];
+    const double r = rij.norm();
+    const Vec3 e = r > 0 ? Vec3(rij / r) : Vec3::UnitZ();
+    mobility::apply_pair(mobility::pair_scalars(a[std::size_t(i)], a[std::size_t(j)], r, mu, m), e, m,
+                         in.data() + long(j) * d, yi);
+    ++count;
+  }
+}
+
+}  // namespace
+
+TreeFarField::TreeFarField(const MobilitySpec& spec, const TreeParameters& parameters)
+    : m_(spec.moments),
+      mu_(spec.viscosity),
+      p_(parameters),
+      moment_set_(parameters.order),
+      deriv_set_(parameters.order + derivative_order(spec.moments)),
+      beta_set_(derivative_order(spec.moments)) {
+  if (!(p_.theta > 0 && p_.theta < 1))
+    throw std::invalid_argument("tree far field: theta " + std::to_string(p_.theta) + " outside (0, 1)");
+  if (p_.order < 0 || p_.order > 30)
+    throw std::invalid_argument("tree far field: order " + std::to_string(p_.order) + " outside [0, 30]");
+  if (p_.leaf_size < 1) throw std::invalid_argument("tree far field: leaf size < 1");
+  const int ng = moment_set_.size(), nb = beta_set_.size();
+  sum_index_.resize(std::size_t(ng * nb));
+  for (int g = 0; g < ng; ++g)
+    for (int b = 0; b < nb; ++b) {
+      const auto& al = moment_set_[g];
+      const auto& be = beta_set_[b];
+      sum_index_[std::size_t(g * nb + b)] = deriv_set_.index(al[0] + be[0], al[1] + be[1], al[2] + be[2]);
+    }
+  // Local expansions have order q = p + k (k the highest target derivative), so that every
+  // response is accurate to the order of the moments.
+  const int nl = deriv_set_.size();
+  for (int b = 0; b < nl; ++b) {
+    shift_begin_.push_back(int(shift_terms_.size()));
+    const auto& be = deriv_set_[b];
+    for (int g = 0; g < nl; ++g) {
+      const auto& al = deriv_set_[g];
+      const int sum = deriv_set_.index(al[0] + be[0], al[1] + be[1], al[2] + be[2]);
+      if (sum < 0) continue;
+      shift_terms_.push_back({b, g, sum});
+      if (g < ng) m2l_terms_.push_back({b, g, sum});
+    }
+  }
+  shift_begin_.push_back(int(shift_terms_.size()));
+}
+
+void TreeFarField::set_configuration(const Configuration& c) {
+  if (c.domain.periodic()) throw std::invalid_argument("tree far field: the domain is periodic (use ewald or pme)");
+  x_ = c.x;
+  a_ = c.a;
+  tree_ = build_octree(x_, a_, p_.leaf_size);
+  moments_.assign(tree_.nodes.size() * 4 * std::size_t(moment_set_.size()), 0.0);
+  if (p_.evaluation == TreeEvaluation::fmm) {
+    locals_.assign(tree_.nodes.size() * 4 * std::size_t(deriv_set_.size()), 0.0);
+    build_interaction_lists();
+  }
+}
+
+// Dual-tree traversal from (root, root): a well-separated pair is converted, two leaves are summed
+// pair by pair, otherwise the node with the larger radius (a non-leaf) is split. Lists are built
+// serially, in a fixed order, per target node.
+void TreeFarField::build_interaction_lists() {
+  const int nn = int(tree_.nodes.size());
+  parent_.assign(std::size_t(nn), -1);
+  for (int k = 0; k < nn; ++k)
+    for (int c = 0; c < tree_.nodes[std::size_t(k)].child_count; ++c)
+      parent_[std::size_t(tree_.nodes[std::size_t(k)].first_child + c)] = k;
+  std::vector<std::vector<int>> m2l(static_cast<std::size_t>(nn)), p2p(static_cast<std::size_t>(nn));
+  if (nn > 0) {
+    std::vector<std::pair<int, int>> stack{{0, 0}};
+    while (!stack.empty()) {
+      const auto [t, s] = stack.back();
+      stack.pop_back();
+      const OctreeNode& T = tree_.nodes[std::size_t(t)];
+      const OctreeNode& S = tree_.nodes[std::size_t(s)];
+      const double dist = (T.centre - S.centre).norm();
+      const double rr = T.radius + S.radius;
+      if (t != s && rr < p_.theta * dist && dist - rr > T.a_max + S.a_max) {
+        m2l[std::size_t(t)].push_back(s);
+        continue;
+      }
+      if (T.leaf() && S.leaf()) {
+        p2p[std::size_t(t)].push_back(s);
+        continue;
+      }
+      const bool split_target = S.leaf() || (!T.leaf() && T.radius >= S.radius);
+      // pushed in reverse so that children are visited in their stored order
+      if (split_target) {
+        for (int c = T.child_count - 1; c >= 0; --c) stack.push_back({T.first_child + c, s});
+      } else {
+        for (int c = S.child_count - 1; c >= 0; --c) stack.push_back({t, S.first_child + c});
+      }
+    }
+  }
+  auto flatten = [&](const std::vector<std::vector<int>>& lists, std::vector<int>& begin, std::vector<int>& flat) {
+    begin.assign(1, 0);
+    flat.clear();
+    for (const auto& l : lists) {
+      flat.insert(flat.end(), l.begin(), l.end());
+      begin.push_back(int(flat.size()));
+    }
+  };
+  flatten(m2l, m2l_begin_, m2l_source_);
+  flatten(p2p, p2p_begin_, p2p_source_);
+}
+
+// Moments of the four potentials of every node, summed from its particles (the source terms of
+// the header). M[pot][g] multiplies d^g G(x - c).
+void TreeFarField::compute_moments(const VecX& in) const {
+  const int d = dof_per_particle(m_);
+  const int ng = moment_set_.size();
+  const long nodes = long(tree_.nodes.size());
+  const bool torque = has_torque(m_), stresslet = has_stresslet(m_);
+#pragma omp parallel
+  {
+    std::vector<double> w(static_cast<std::size_t>(ng));
+#pragma omp for schedule(dynamic, 4)
+    for (long k = 0; k < nodes; ++k) {
+      const OctreeNode& node = tree_.nodes[std::size_t(k)];
+      double* M = moments_.data() + std::size_t(k) * 4 * std::size_t(ng);
+      std::fill(M, M + 4 * ng, 0.0);
+      for (int q = node.begin; q < node.end; ++q) {
+        const std::size_t i = std::size_t(tree_.order[std::size_t(q)]);
+        const double* src = in.data() + long(i) * d;
+        const Vec3 s = x_[i] - node.centre;
+        const Vec3 F(src[0], src[1], src[2]);
+        Mat3 D = Mat3::Zero();
+        Mat3 S = Mat3::Zero();
+        if (torque) {
+          const Vec3 T(src[3], src[4], src[5]);
+          // D_jl = -1/2 eps_jlm T_m
+          D(0, 1) = -0.5 * T.z();
+          D(1, 0) = 0.5 * T.z();
+          D(0, 2) = 0.5 * T.y();
+          D(2, 0) = -0.5 * T.y();
+          D(1, 2) = -0.5 * T.x();
+          D(2, 1) = 0.5 * T.x();
+        }
+        if (stresslet) {
+          Vec5 s5;
+          for (int r = 0; r < 5; ++r) s5[r] = src[6 + r];
+          S = from_vec5(s5);
+          D += S;
+        }
+        const double a2 = a_[i] * a_[i];
+        const Vec3 psi_dipole = D.transpose() * s + (a2 / 3.0) * F;  // (s_j D_jl + a^2/3 F_l)
+        const double psi_charge = s.dot(F);
+        const Mat3 Q = (a2 / 5.0) * S;
+        scaled_powers(s, moment_set_, w.data());
+        for (int g = 0; g < ng; ++g) {
+          const double wg = w[std::size_t(g)];
+          for (int j = 0; j < 3; ++j) M[j * ng + g] += F[j] * wg;
+          M[3 * ng + g] += psi_charge * wg;
+          // dipoles: coefficient -moment_l w_g at g + e_l
+          for (int l = 0; l < 3; ++l) {
+            const int gl = moment_set_.plus(g, l);
+            if (gl < 0) continue;
+            for (int j = 0; j < 3; ++j) M[j * ng + gl] -= D(j, l) * wg;
+            M[3 * ng + gl] -= psi_dipole[l] * wg;
+            if (stresslet)
+              for (int jj = 0; jj < 3; ++jj) {
+                const int gjl = moment_set_.plus(gl, jj);
+                if (gjl >= 0) M[3 * ng + gjl] += Q(jj, l) * wg;
+              }
+          }
+        }
+      }
+    }
+  }
+}
+
+void TreeFarField::apply(const VecX& in, VecX& out) const {
+  const int d = dof_per_particle(m_);
+  const long n = long(x_.size());
+  if (in.size() != n * d)
+    throw std::invalid_argument("tree far field: input of size " + std::to_string(in.size()) + ", expected " +
+                                std::to_string(n * d));
+  out.setZero(n * d);
+  if (n == 0) return;
+  compute_moments(in);
+  if (p_.evaluation == TreeEvaluation::fmm)
+    apply_fmm(in, out);
+  else
+    apply_barnes_hut(in, out);
+}
+
+void TreeFarField::apply_fmm(const VecX& in, VecX& out) const {
+  stats_ = TreeProductStats{};
+  pair_count_ = 0;
+  long m2l_count = 0;
+  for (std::size_t k = 0; k + 1 < m2l_begin_.size(); ++k) m2l_count += m2l_begin_[k + 1] - m2l_begin_[k];
+#pragma omp parallel
+#pragma omp single
+  downward(0, in, out);
+  stats_.m2l = m2l_count;
+  stats_.pair_interactions = pair_count_;
+}
+
+// Local expansion of node t: shifted from its parent's, plus the conversions of its list; a leaf
+// then evaluates its targets (expansion + exact pairs); children are tasks.
+void TreeFarField::downward(int t, const VecX& in, VecX& out) const {
+  const int ng = moment_set_.size(), nl = deriv_set_.size();
+  const OctreeNode& T = tree_.nodes[std::size_t(t)];
+  double* L = locals_.data() + std::size_t(t) * 4 * std::size_t(nl);
+  std::fill(L, L + 4 * nl, 0.0);
+  std::vector<double> tmp(static_cast<std::size_t>(4 * nl));
+  if (parent_[std::size_t(t)] >= 0) {
+    const int par = parent_[std::size_t(t)];
+    const double* LP = locals_.data() + std::size_t(par) * 4 * std::size_t(nl);
+    const Vec3 shift = T.centre - tree_.nodes[std::size_t(par)].centre;
+    // L_beta = sum_delta LP_(beta + delta) shift^delta / delta!  (scaled_powers takes -shift)
+    scaled_powers(-shift, deriv_set_, tmp.data());
+    for (const auto& term : shift_terms_) {
+      const double w = tmp[std::size_t(term[1])];
+      for (int pot = 0; pot < 4; ++pot) L[pot * nl + term[0]] += LP[pot * nl + term[2]] * w;
+    }
+    // psi about the child's centre: + (c_parent - c_child)_j phi_j
+    for (int b = 0; b < nl; ++b)
+      for (int j = 0; j < 3; ++j) L[3 * nl + b] -= shift[j] * L[j * nl + b];
+  }
+  std::vector<double> D(static_cast<std::size_t>(nl));
+  for (int q = m2l_begin_[std::size_t(t)]; q < m2l_begin_[std::size_t(t) + 1]; ++q) {
+    const int s = m2l_source_[std::size_t(q)];
+    const OctreeNode& S = tree_.nodes[std::size_t(s)];
+    const double* M = moments_.data() + std::size_t(s) * 4 * std::size_t(ng);
+    const Vec3 R = T.centre - S.centre;
+    inverse_distance_derivatives(R, deriv_set_, D.data());
+    std::fill(tmp.begin(), tmp.end(), 0.0);
+    for (const auto& term : m2l_terms_) {
+      const double dv = D[std::size_t(term[2])];
+      for (int pot = 0; pot < 4; ++pot) tmp[std::size_t(pot * nl + term[0])] += M[pot * ng + term[1]] * dv;
+    }
+    // psi about the target's centre: + (c_S - c_T)_j phi_j
+    for (int b = 0; b < nl; ++b) {
+      for (int pot = 0; pot < 4; ++pot) L[pot * nl + b] += tmp[std::size_t(pot * nl + b)];
+      for (int j = 0; j < 3; ++j) L[3 * nl + b] -= R[j] * tmp[std::size_t(j * nl + b)];
+    }
+  }
+  if (!T.leaf()) {
+    for (int c = 0; c < T.child_count; ++c) {
+      const int child = T.first_child + c;
+#pragma omp task default(shared) firstprivate(child) if (tree_.nodes[std::size_t(child)].size() > 256)
+      downward(child, in, out);
+    }
+#pragma omp taskwait
+    return;
+  }
+  // targets of the leaf
+  const int d = dof_per_particle(m_);
+  const int nb = beta_set_.size();
+  const DerivativeIndex ix(beta_set_);
+  std::vector<double> P(static_cast<std::size_t>(4 * nb));
+  const double scale = 1.0 / (8.0 * kPi * mu_);
+  long pairs = 0;
+  for (int q = T.begin; q < T.end; ++q) {
+    const int i = tree_.order[std::size_t(q)];
+    const double ai = a_[std::size_t(i)];
+    double* yi = out.data() + long(i) * d;
+    mobility::apply_self(ai, mu_, m_, in.data() + long(i) * d, yi);
+    const Vec3 R = x_[std::size_t(i)] - T.centre;
+    scaled_powers(-R, deriv_set_, tmp.data());  // R^delta / delta!
+    std::fill(P.begin(), P.end(), 0.0);
+    for (int b = 0; b < nb; ++b) {
+      const auto& be = beta_set_[b];
+      const int bb = deriv_set_.index(be[0], be[1], be[2]);
+      for (int k = shift_begin_[std::size_t(bb)]; k < shift_begin_[std::size_t(bb) + 1]; ++k) {
+        const auto& term = shift_terms_[std::size_t(k)];
+        const double w = tmp[std::size_t(term[1])];
+        for (int pot = 0; pot < 4; ++pot) P[std::size_t(pot * nb + b)] += L[pot * nl + term[2]] * w;
+      }
+    }
+    double y[11] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0};
+    add_responses(P.data(), nb, ix, R, ai, m_, y);
+    for (int r = 0; r < d; ++r) yi[r] += scale * y[r];
+    for (int k = p2p_begin_[std::size_t(t)]; k < p2p_begin_[std::size_t(t) + 1]; ++k) {
+      const OctreeNode& S = tree_.nodes[std::size_t(p2p_source_[std::size_t(k)])];
+      add_pairs(tree_.order, S.begin, S.end, i, x_, a_, mu_, m_, in, yi, pairs);
+    }
+  }
+#pragma omp atomic
+  pair_count_ += pairs;
+}
+
+void TreeFarField::apply_barnes_hut(const VecX& in, VecX& out) const {
+  const int d = dof_per_particle(m_);
+  const long n = long(x_.size());
+  const int ng = moment_set_.size(), nb = beta_set_.size(), nd = deriv_set_.size();
+  const double scale = 1.0 / (8.0 * kPi * mu_);
+  const double theta2 = p_.theta * p_.theta;
+  const DerivativeIndex ix(beta_set_);
+  long node_count = 0, pair_count = 0;
+#pragma omp parallel reduction(+ : node_count, pair_count)
+  {
+    std::vector<double> D(static_cast<std::size_t>(nd));
+    std::vector<double> P(static_cast<std::size_t>(4 * nb));  // d^beta of the 4 potentials
+    std::vector<int> stack;
+    stack.reserve(256);
+#pragma omp for schedule(dynamic, 32)
+    for (long q = 0; q < n; ++q) {
+      const int i = tree_.order[std::size_t(q)];
+      const Vec3 xi = x_[std::size_t(i)];
+      const double ai = a_[std::size_t(i)];
+      double* yi = out.data() + long(i) * d;
+      mobility::apply_self(ai, mu_, m_, in.data() + long(i) * d, yi);
+      double y[11] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0};
+      stack.clear();
+      stack.push_back(0);
+      while (!stack.empty()) {
+        const int k = stack.back();
+        stack.pop_back();
+        const OctreeNode& node = tree_.nodes[std::size_t(k)];
+        const Vec3 R = xi - node.centre;
+        const double R2 = R.squaredNorm();
+        const bool far = node.radius * node.radius < theta2 * R2 && std::sqrt(R2) - node.radius > ai + node.a_max;
+        if (!far) {
+          if (node.leaf())
+            add_pairs(tree_.order, node.begin, node.end, i, x_, a_, mu_, m_, in, yi, pair_count);
+          else
+            for (int c = 0; c < node.child_count; ++c) stack.push_back(node.first_child + c);
+          continue;
+        }
+        ++node_count;
+        inverse_distance_derivatives(R, deriv_set_, D.data());
+        const double* M = moments_.data() + std::size_t(k) * 4 * std::size_t(ng);
+        std::fill(P.begin(), P.end(), 0.0);
+        for (int g = 0; g < ng; ++g) {
+          const double m0 = M[g], m1 = M[ng + g], m2 = M[2 * ng + g], m3 = M[3 * ng + g];
+          const int* si = sum_index_.data() + std::size_t(g * nb);
+          for (int b = 0; b < nb; ++b) {
+            const double dv = D[std::size_t(si[b])];
+            P[std::size_t(b)] += m0 * dv;
+            P[std::size_t(nb + b)] += m1 * dv;
+            P[std::size_t(2 * nb + b)] += m2 * dv;
+            P[std::size_t(3 * nb + b)] += m3 * dv;
+          }
+        }
+        add_responses(P.data(), nb, ix, R, ai, m_, y);
+      }
+      for (int r = 0; r < d; ++r) yi[r] += scale * y[r];
+    }
+  }
+  stats_ = TreeProductStats{};
+  stats_.node_interactions = node_count;
+  stats_.pair_interactions = pair_count;
+}
+
+}  // namespace stokesian::trees

@@ -1,0 +1,107 @@
+#pragma once
+// Barnes-Hut far field for open domains: y = M_inf x for forces, torques and stresslets of N
+// spheres of any radii, with multipole expansions of order p about the octree's nodes.
+//
+// Mathematics (docs/tree.md). For two separated spheres (r >= a_t + a_s) every block of the grand
+// mobility derives from Psi = (1 + w_t a_t^2 Lap)(1 + w_s a_s^2 Lap) r / (8 pi mu), w = 1/6 for
+// force/velocity and 1/10 for torque/stresslet/rotation/strain (engine/kernels/mobility_pair.hpp).
+// Sources. A force F, torque T and stresslet S of a sphere of radius a at y act on the fluid as a
+// Stokeslet F and a Stokeslet doublet D_jl = S_jl - 1/2 eps_jlm T_m (u_i = D_jl d/dy_l J_ij), plus
+// the source-side Laplacians (a^2/6 for F, a^2/10 for S; zero for the rotlet). With the Laplace
+// kernel G = 1/|x - y| the disturbance velocity is [the harmonic form of Tornberg & Greengard 2008 for the
+// Stokeslet; extended here to doublets and the finite-size terms]
+//     8 pi mu u_i(x) = phi_i - (x - c)_j d_i phi_j + d_i psi,
+// with four harmonic potentials, all about one centre c:
+//     phi_j = sum [ F_j G + D_jl d/dy_l G ],
+//     psi   = sum [ ((y - c).F) G + ((y - c)_j D_jl + a^2/3 F_l) d/dy_l G + a^2/5 S_jl d/dy_j d/dy_l G ].
+// Responses at a sphere of radius a_t at x (target-side Laplacians; Lap u_i = -2 d_i d_j phi_j):
+//     U_i = u_i - (a_t^2/3) d_i d_j phi_j,
+//     Omega = 1/2 curl u,
+//     E_ik = sym(d_k u_i) - (a_t^2/5) d_i d_k d_j phi_j.
+// Expansion. Each node holds the Taylor moments of its four potentials about its centre to order
+// p (trees/harmonic_expansion.hpp), so d^beta Phi(x) = sum_{|g| <= p} M_g d^(g + beta) G(x - c).
+// The truncation error of a node seen at distance |x - c| with radius rho is O((rho/|x - c|)^(p+1)).
+// Traversal. A node is used through its expansion when rho < theta |x - c| and every sphere in it
+// is separated from the target's (|x - c| - rho > a_t + a_max); otherwise its children are
+// visited, and the pairs of a leaf are summed with the exact pair kernel of engine/kernels (any
+// separation, overlapping spheres included). Self terms are exact.
+// Each target accumulates its own output, so the result does not depend on the thread count.
+#include "engine/core/operators.hpp"
+#include "engine/core/types.hpp"
+#include "trees/harmonic_expansion.hpp"
+#include "trees/octree.hpp"
+
+#include <array>
+#include <vector>
+
+namespace stokesian::trees {
+
+// How node expansions reach the targets.
+//   fmm         - dual-tree traversal: a well-separated node pair (rho_T + rho_S < theta |c_T - c_S|)
+//                 converts the source node's moments into a Taylor (local) expansion of order p
+//                 about the target node's centre (terms |gamma| + |beta| <= p), passed down the
+//                 tree and evaluated at each target (the fast path);
+//   barnes_hut  - each target visits the tree and evaluates the moments of every accepted node
+//                 (rho < theta |x - c|) itself (the plain twin; at p = 0 the monopole scheme of
+//                 the thesis, chapter 3).
+enum class TreeEvaluation { fmm, barnes_hut };
+
+struct TreeParameters {
+  double theta = 0.5;  // opening angle
+  int order = 4;       // expansion order p >= 0
+  int leaf_size = 32;  // largest particle count of a leaf
+  TreeEvaluation evaluation = TreeEvaluation::fmm;
+};
+
+// Work counters of the last product (interactions per kind).
+struct TreeProductStats {
+  long node_interactions = 0;  // target-node multipole evaluations
+  long pair_interactions = 0;  // exact pair kernel evaluations
+  long m2l = 0;                // node-node conversions (fmm)
+};
+
+class TreeFarField final : public stokesian::MobilityOperator {
+ public:
+  TreeFarField(const MobilitySpec& spec, const TreeParameters& parameters);
+  const char* name() const override { return "tree"; }
+  Moments moments() const override { return m_; }
+  Eigen::Index size() const override { return Eigen::Index(x_.size()) * dof_per_particle(m_); }
+  void set_configuration(const Configuration& c) override;
+  void apply(const VecX& in, VecX& out) const override;
+  bool set_configuration_uses_threads(long) const override { return false; }
+
+  const TreeParameters& parameters() const { return p_; }
+  const Octree& tree() const { return tree_; }
+  const TreeProductStats& last_stats() const { return stats_; }
+
+ private:
+  void compute_moments(const VecX& in) const;
+  void apply_barnes_hut(const VecX& in, VecX& out) const;
+  void apply_fmm(const VecX& in, VecX& out) const;
+  void build_interaction_lists();
+  void downward(int node, const VecX& in, VecX& out) const;
+
+  Moments m_;
+  double mu_;
+  TreeParameters p_;
+  MultiIndexSet moment_set_;  // order p
+  MultiIndexSet deriv_set_;   // order p + k (k = 2 for F, FT; 3 for FTS)
+  MultiIndexSet beta_set_;    // order k
+  std::vector<int> sum_index_;  // index in deriv_set_ of (gamma + beta), gamma x beta
+  // Local expansions have the order q of deriv_set_. Shift terms (beta, delta, beta + delta) with
+  // |beta + delta| <= q, grouped by beta; conversion terms (beta, gamma, beta + gamma), |gamma| <= p.
+  std::vector<std::array<int, 3>> shift_terms_, m2l_terms_;
+  std::vector<int> shift_begin_;  // terms of beta: shift_terms_[shift_begin_[beta] ..)
+  // fmm interaction lists per target node (CSR): sources converted (m2l) and leaf pairs (p2p)
+  std::vector<int> m2l_begin_, m2l_source_, p2p_begin_, p2p_source_;
+  std::vector<int> parent_;
+  mutable std::vector<double> locals_;   // per node: 4 potentials x deriv_set_.size()
+  std::vector<Vec3> x_;
+  std::vector<double> a_;
+  Octree tree_;
+  mutable std::vector<double> moments_;  // per node: 4 potentials x moment_set_.size()
+  mutable TreeProductStats stats_;
+  mutable long pair_count_ = 0;
+};
+
+}  // namespace stokesian::trees
