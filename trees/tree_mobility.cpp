@@ -3,6 +3,8 @@
 #include "engine/core/sym_traceless.hpp"
 #include "engine/kernels/mobility_pair.hpp"
 
+#include <omp.h>
+
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -93,6 +95,53 @@ void add_pairs(const std::vector<int>& order, int begin, int end, int i, const s
 }
 
 }  // namespace
+
+namespace {
+
+// Terms of one conversion: (beta, gamma) with |gamma| <= p, |beta + gamma| <= p + k.
+double conversion_terms(int p, int k) {
+  double t = 0;
+  for (int g = 0; g <= p; ++g) {
+    const int q = p + k - g;
+    t += 0.5 * (g + 1) * (g + 2) * (q + 1) * (q + 2) * (q + 3) / 6.0;
+  }
+  return t;
+}
+
+}  // namespace
+
+double tree_error_model(const TreeParameters& p, Moments m) {
+  const double geometric = std::pow(p.theta, p.order + 1);
+  return m == Moments::FTS ? 0.05 * (p.order + 1) * geometric : 0.1 * geometric;
+}
+
+TreeParameters tree_parameters(double tolerance, Moments m) {
+  if (!(tolerance >= 1e-10 && tolerance <= 0.5))
+    throw std::invalid_argument("tree far field: tolerance " + std::to_string(tolerance) + " outside [1e-10, 0.5]");
+  const double c_pair = m == Moments::F ? 13e-9 : (m == Moments::FT ? 25e-9 : 50e-9);
+  const double c_term = 0.8e-9, c_conv = 1e-6;
+  TreeParameters best;
+  double best_cost = -1;
+  for (int step = 0; step <= 8; ++step) {
+    TreeParameters p;
+    p.theta = 0.2 + 0.05 * step;
+    p.leaf_size = 32;
+    p.evaluation = TreeEvaluation::fmm;
+    for (p.order = 0; p.order <= 16 && tree_error_model(p, m) > tolerance; ++p.order) {
+    }
+    if (p.order > 16) continue;
+    const double x = p.theta / 0.5;
+    const double cost = 408 * std::pow(x, -2.9) * c_pair +
+                        31.4 * std::pow(x, -2.1) * (conversion_terms(p.order, derivative_order(m)) * c_term + c_conv);
+    if (best_cost < 0 || cost < best_cost) {
+      best = p;
+      best_cost = cost;
+    }
+  }
+  return best;
+}
+
+TreeFarField::TreeFarField(const MobilitySpec& spec) : TreeFarField(spec, tree_parameters(spec.tolerance, spec.moments)) {}
 
 TreeFarField::TreeFarField(const MobilitySpec& spec, const TreeParameters& parameters)
     : m_(spec.moments),
@@ -264,11 +313,15 @@ void TreeFarField::apply(const VecX& in, VecX& out) const {
                                 std::to_string(n * d));
   out.setZero(n * d);
   if (n == 0) return;
+  const double t0 = omp_get_wtime();
   compute_moments(in);
+  const double t1 = omp_get_wtime();
   if (p_.evaluation == TreeEvaluation::fmm)
     apply_fmm(in, out);
   else
     apply_barnes_hut(in, out);
+  stats_.upward_seconds = t1 - t0;
+  stats_.downward_seconds = omp_get_wtime() - t1;
 }
 
 void TreeFarField::apply_fmm(const VecX& in, VecX& out) const {

@@ -53,15 +53,36 @@ struct TreeParameters {
   TreeEvaluation evaluation = TreeEvaluation::fmm;
 };
 
+// The knobs from the requested relative accuracy t of a product (MobilitySpec::tolerance), the one
+// place where they are derived (docs/tree.md, "Knobs from the tolerance"). FMM evaluation, leaf
+// size 32; theta in {0.2, 0.25, ..., 0.6} and the smallest p in [0, 16] whose error model
+//     e(theta, p) = C (p + 1)^s theta^(p+1)   (F, FT: C = 0.1, s = 0; FTS: C = 0.05, s = 1)
+// stays at or below t, choosing the pair of least modelled cost per particle
+//     n_pair(theta) c_pair + n_conv(theta) (terms(p) c_term + c_conv),
+// n_pair = 408 (theta/0.5)^-2.9 near pairs and n_conv = 31.4 (theta/0.5)^-2.1 conversions per
+// particle (counted at N = 3e4, phi = 0.1), terms(p) the conversion terms of order p, c_pair =
+// 13/25/50 ns (F/FT/FTS), c_term = 0.8 ns, c_conv = 1 us (measured, N = 1e4). The constants C
+// bound the errors measured in tests/test_tree_mobility.cpp (uniform, polydisperse) with a margin;
+// the test checks achieved <= requested from 1e-2 to 1e-8. Throws std::invalid_argument for t
+// outside [1e-10, 0.5].
+TreeParameters tree_parameters(double tolerance, Moments m);
+
+// Modelled relative error of a product with these parameters (the model above).
+double tree_error_model(const TreeParameters& p, Moments m);
+
 // Work counters of the last product (interactions per kind).
 struct TreeProductStats {
   long node_interactions = 0;  // target-node multipole evaluations
   long pair_interactions = 0;  // exact pair kernel evaluations
   long m2l = 0;                // node-node conversions (fmm)
+  double upward_seconds = 0;   // moments of every node
+  double downward_seconds = 0; // conversions, shifts, evaluation at the targets and near pairs
 };
 
 class TreeFarField final : public stokesian::MobilityOperator {
  public:
+  // Knobs from spec.tolerance (tree_parameters), or given explicitly.
+  explicit TreeFarField(const MobilitySpec& spec);
   TreeFarField(const MobilitySpec& spec, const TreeParameters& parameters);
   const char* name() const override { return "tree"; }
   Moments moments() const override { return m_; }
