@@ -6,6 +6,7 @@
 #include "engine/sd_dense.hpp"
 #include "ewald/ewald_reference.hpp"
 #include "ewald/pme.hpp"
+#include "trees/tree_mobility.hpp"
 
 namespace stokesian {
 
@@ -24,6 +25,8 @@ Registry<FarFieldMethodEntry> make_far_field_methods() {
          [](const MobilitySpec& s) { return std::make_unique<ewald::EwaldFarField>(s); }});
   r.add({"pme", "PME Ewald sum, O(N log N), accuracy from tolerance", true, false, true,
          [](const MobilitySpec& s) { return std::make_unique<ewald::PmeFarField>(s); }});
+  r.add({"tree", "octree fast multipole method, open domains, accuracy from tolerance", false, false, false,
+         [](const MobilitySpec& s) { return std::make_unique<trees::TreeFarField>(s); }, false});
   return r;
 }
 

@@ -24,6 +24,10 @@ struct FarFieldMethodEntry {
   bool dense = false;          // holds the dense matrix (MobilityOperator::dense), as dense SD needs
   bool auto_choice = false;    // the default for its domain kind
   std::function<std::unique_ptr<MobilityOperator>(const MobilitySpec&)> make;
+  // The product is symmetric to round-off (x.My = y.Mx). Otherwise its asymmetry is bounded by the
+  // requested tolerance (the tree: its products are not exact adjoints), which Krylov and Lanczos
+  // methods tolerate at that level; tests/test_conformance.cpp checks the bound that applies.
+  bool symmetric_to_roundoff = true;
 };
 
 struct SolverSetup {

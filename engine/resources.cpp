@@ -9,6 +9,7 @@
 #include "lubrication/near_field.hpp"
 #include "ewald/lattice.hpp"
 #include "ewald/pme_parameters.hpp"
+#include "trees/tree_mobility.hpp"
 #include "ewald/real_space.hpp"
 
 #include <algorithm>
@@ -177,6 +178,16 @@ ResourceEstimate estimate_resources(const Scene& s, const ResolvedModel& model) 
       } catch (const std::invalid_argument&) {
         // The box is too small for the minimum-image real-space sum: the operator reports it.
       }
+    } else if (model.far_field == "tree") {
+      const double ff_tol = derive_knobs(s.hydro.tolerance, model.level, a_max / a_min).far_field;
+      const trees::TreeParameters p = trees::tree_parameters(std::max(ff_tol, 1e-14), model.moments);
+      Keys tk = model_keys;
+      add_key(tk, s, "hydrodynamics", "tolerance");
+      e.components.push_back({"octree expansions and lists", trees::tree_memory_bytes(p, model.moments, N),
+                              "theta " + num(p.theta) + ", order " + std::to_string(p.order) +
+                                  " from far-field tolerance " + num(ff_tol) + " (trees/tree_mobility.hpp)",
+                              tk});
+      product = trees::tree_product_seconds(p, model.moments, N);
     } else {
       product = direct_pair_seconds(d) * N * N;
     }

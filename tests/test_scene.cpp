@@ -148,7 +148,9 @@ TEST_CASE("asking for a model the engine lacks is an error, not a fallback") {
   CHECK(contains(error_of("[domain]\nkind = \"periodic\"\nbox = [10, 10, 10]\n" + kTwo +
                           "[hydrodynamics]\nfar_field = \"direct\"\n"), "no periodic images"));
   CHECK(contains(error_of(kTwo + "[hydrodynamics]\nfar_field = \"pme\"\n"), "needs a periodic domain"));
-  CHECK(contains(error_of(kTwo + "[hydrodynamics]\nfar_field = \"tree\"\n"), "not in this version"));
+  CHECK(contains(error_of(kTwo + "[hydrodynamics]\nfar_field = \"octree\"\n"), "not in this version"));
+  CHECK(contains(error_of("[domain]\nkind = \"periodic\"\nbox = [10, 10, 10]\n" + kTwo +
+                          "[hydrodynamics]\nfar_field = \"tree\"\n"), "no periodic images"));
   CHECK(contains(error_of(kTwo + "[fluid]\nkT = 1.0\n[time]\nintegrator = \"rkf45\"\n"), "rkf45"));
   CHECK(contains(error_of(kTwo + "[forces]\nexternal_torque = [0,0,1]\n[hydrodynamics]\nmoments = \"F\"\n"), "torques"));
 }

@@ -5,6 +5,8 @@
 #include <doctest/doctest.h>
 
 #include "engine/kernels/far_field.hpp"
+#include "engine/simulation.hpp"
+#include "io/scene_toml.hpp"
 #include "trees/harmonic_expansion.hpp"
 #include "trees/octree.hpp"
 #include "trees/tree_mobility.hpp"
@@ -14,6 +16,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <random>
+#include <sstream>
 
 using namespace stokesian;
 using namespace stokesian::trees;
@@ -211,7 +214,7 @@ TEST_CASE("tree product: independent of the thread count, and its asymmetry boun
   CHECK(asym < 2 * err);
 }
 
-TEST_CASE("knobs from the tolerance: achieved <= requested from 1e-2 to 1e-8 (uniform, polydisperse, dense cloud)") {
+TEST_CASE("knobs from the tolerance: achieved <= requested from 1e-2 to 1e-12 (uniform, polydisperse, dense cloud)") {
   // n spheres: uniform (phi = 0.13), radii 0.3-3 (overlaps), and a dense spherical cloud (phi =
   // 0.3). The default suite uses n = 1200; the long form (ctest -L long: test_tree_tolerance_long,
   // n = 3000, about 2 minutes) is large enough that the tree converts most interactions at every
@@ -232,7 +235,7 @@ TEST_CASE("knobs from the tolerance: achieved <= requested from 1e-2 to 1e-8 (un
     clouds.push_back(ball);
   }
   for (Moments m : {Moments::F, Moments::FT, Moments::FTS}) {
-    for (double t : {1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8}) {
+    for (double t : {1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-10, 1e-12}) {
       const TreeParameters p = tree_parameters(t, m);
       CHECK(tree_error_model(p, m) <= t);
       for (std::size_t k = 0; k < clouds.size(); ++k) {
@@ -243,6 +246,36 @@ TEST_CASE("knobs from the tolerance: achieved <= requested from 1e-2 to 1e-8 (un
       }
     }
   }
-  CHECK_THROWS_AS(tree_parameters(0.0, Moments::F), std::invalid_argument);
+  CHECK_THROWS_AS(tree_parameters(1e-15, Moments::F), std::invalid_argument);
   CHECK_THROWS_AS(tree_parameters(0.7, Moments::F), std::invalid_argument);
+}
+
+TEST_CASE("far_field = \"tree\" in a scene: a settling cloud follows the direct far field to the tolerance") {
+  // 600 spheres settling as a spherical cloud (phi = 0.1), F-level far-field dynamics, 5 Euler
+  // steps: the tree's trajectory against the direct product's, and check's resource line.
+  auto scene_text = [](const char* method) {
+    std::ostringstream t;
+    t << "[particles]\ngenerate = \"random\"\ncount = 600\nvolume_fraction = 0.1\nregion = \"sphere\"\nseed = 4\n"
+      << "[forces]\nexternal_force = [0.0, 0.0, -1.0]\n"
+      << "[hydrodynamics]\nmodel = \"far_field\"\nmoments = \"F\"\ntolerance = 1e-5\nfar_field = \"" << method << "\"\n"
+      << "[time]\ndt = 0.5\nsteps = 5\n";
+    return t.str();
+  };
+  Simulation tree(io::parse_scene(scene_text("tree"), "tree.toml"));
+  Simulation direct(io::parse_scene(scene_text("direct"), "direct.toml"));
+  CHECK(tree.model().far_field == "tree");
+  State st = tree.initial_state(), sd = direct.initial_state();
+  double worst = 0, travel = 0;
+  for (int step = 0; step < 5; ++step) {
+    tree.advance(st, tree.evaluate(st, st.position));
+    direct.advance(sd, direct.evaluate(sd, sd.position));
+  }
+  for (std::size_t i = 0; i < st.position.size(); ++i) {
+    worst = std::max(worst, (st.position[i] - sd.position[i]).norm());
+    travel = std::max(travel, (sd.position[i] - direct.initial_state().position[i]).norm());
+  }
+  MESSAGE("largest position difference " << worst << " of a largest travel " << travel);
+  CHECK(travel > 1.0);  // collective settling (a lone sphere would travel 5 x 0.5 / (6 pi) = 0.13)
+  // velocities within the tolerance (products and the CG residual at 1e-5) on every step
+  CHECK(worst < 1e-5 * travel);
 }

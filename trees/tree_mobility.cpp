@@ -5,6 +5,7 @@
 
 #include <omp.h>
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -115,24 +116,42 @@ double tree_error_model(const TreeParameters& p, Moments m) {
   return m == Moments::FTS ? 0.05 * (p.order + 1) * geometric : 0.1 * geometric;
 }
 
-TreeParameters tree_parameters(double tolerance, Moments m) {
-  if (!(tolerance >= 1e-10 && tolerance <= 0.5))
-    throw std::invalid_argument("tree far field: tolerance " + std::to_string(tolerance) + " outside [1e-10, 0.5]");
+namespace {
+
+// Modelled seconds per particle of one product (fmm), one thread.
+double cost_per_particle(const TreeParameters& p, Moments m) {
   const double c_pair = m == Moments::F ? 13e-9 : (m == Moments::FT ? 25e-9 : 50e-9);
   const double c_term = 0.8e-9, c_conv = 1e-6;
+  const double x = p.theta / 0.5;
+  return 408 * std::pow(x, -2.9) * c_pair +
+         31.4 * std::pow(x, -2.1) * (conversion_terms(p.order, derivative_order(m)) * c_term + c_conv);
+}
+
+}  // namespace
+
+double tree_product_seconds(const TreeParameters& p, Moments m, double n) { return n * cost_per_particle(p, m); }
+
+double tree_memory_bytes(const TreeParameters& p, Moments m, double n) {
+  const double nodes = std::max(1.0, n / 4);
+  const double expansion = 4.0 * (multi_index_count(p.order) + multi_index_count(p.order + derivative_order(m)));
+  const double lists = 31.4 * std::pow(p.theta / 0.5, -2.1) * n / 4 + 2 * nodes;  // conversion and pair lists
+  return nodes * (8.0 * expansion + sizeof(OctreeNode) + 16.0) + 4.0 * lists + (4.0 + 32.0) * n;
+}
+
+TreeParameters tree_parameters(double tolerance, Moments m) {
+  if (!(tolerance >= 1e-14 && tolerance <= 0.5))
+    throw std::invalid_argument("tree far field: tolerance " + std::to_string(tolerance) + " outside [1e-14, 0.5]");
   TreeParameters best;
   double best_cost = -1;
-  for (int step = 0; step <= 8; ++step) {
+  for (int step = 0; step <= 9; ++step) {
     TreeParameters p;
-    p.theta = 0.2 + 0.05 * step;
+    p.theta = 0.15 + 0.05 * step;
     p.leaf_size = 32;
     p.evaluation = TreeEvaluation::fmm;
-    for (p.order = 0; p.order <= 16 && tree_error_model(p, m) > tolerance; ++p.order) {
+    for (p.order = 0; p.order <= 20 && tree_error_model(p, m) > tolerance; ++p.order) {
     }
-    if (p.order > 16) continue;
-    const double x = p.theta / 0.5;
-    const double cost = 408 * std::pow(x, -2.9) * c_pair +
-                        31.4 * std::pow(x, -2.1) * (conversion_terms(p.order, derivative_order(m)) * c_term + c_conv);
+    if (p.order > 20) continue;
+    const double cost = cost_per_particle(p, m);
     if (best_cost < 0 || cost < best_cost) {
       best = p;
       best_cost = cost;

@@ -55,7 +55,7 @@ struct TreeParameters {
 
 // The knobs from the requested relative accuracy t of a product (MobilitySpec::tolerance), the one
 // place where they are derived (docs/tree.md, "Knobs from the tolerance"). FMM evaluation, leaf
-// size 32; theta in {0.2, 0.25, ..., 0.6} and the smallest p in [0, 16] whose error model
+// size 32; theta in {0.15, 0.2, ..., 0.6} and the smallest p in [0, 20] whose error model
 //     e(theta, p) = C (p + 1)^s theta^(p+1)   (F, FT: C = 0.1, s = 0; FTS: C = 0.05, s = 1)
 // stays at or below t, choosing the pair of least modelled cost per particle
 //     n_pair(theta) c_pair + n_conv(theta) (terms(p) c_term + c_conv),
@@ -63,12 +63,17 @@ struct TreeParameters {
 // particle (counted at N = 3e4, phi = 0.1), terms(p) the conversion terms of order p, c_pair =
 // 13/25/50 ns (F/FT/FTS), c_term = 0.8 ns, c_conv = 1 us (measured, N = 1e4). The constants C
 // bound the errors measured in tests/test_tree_mobility.cpp (uniform, polydisperse) with a margin;
-// the test checks achieved <= requested from 1e-2 to 1e-8. Throws std::invalid_argument for t
-// outside [1e-10, 0.5].
+// the test checks achieved <= requested from 1e-2 to 1e-12. Throws std::invalid_argument for t
+// outside [1e-14, 0.5] (1e-14 is the floor of the engine's knobs, engine/accuracy.cpp).
 TreeParameters tree_parameters(double tolerance, Moments m);
 
 // Modelled relative error of a product with these parameters (the model above).
 double tree_error_model(const TreeParameters& p, Moments m);
+
+// Modelled time of one product for n particles on one thread (the cost model above, fmm), and the
+// operator's memory: the octree, moments and locals of at most n / 4 nodes, interaction lists.
+double tree_product_seconds(const TreeParameters& p, Moments m, double n);
+double tree_memory_bytes(const TreeParameters& p, Moments m, double n);
 
 // Work counters of the last product (interactions per kind).
 struct TreeProductStats {
