@@ -1,28 +1,238 @@
+// Benchmark and accuracy study of the octree far field (issue 16; trees/tree_mobility.hpp), rows by
+// "kind" (plot_tree.py draws them):
+//   kind 0  scaling: time per product y = M x against N, F and FTS, knobs from tolerances 1e-3, 1e-4,
+//           1e-6, a uniform cube (phi = 0.1) and a dense spherical cloud (phi = 0.3), radii 0.5-1.5,
+//           1 and 2 threads; phases set-up (tree, lists), upward, downward; achieved error against
+//           the direct product (N <= 20000) or against the tree at tolerance / 1000 (labelled ref 1)
+//   kind 1  the direct O(N^2) product, measured to N = 20000 (1 and 2 threads)
+//   kind 2  error against theta for p = 0 ... 10 (FMM) and Barnes-Hut p = 0, 3000 spheres: uniform,
+//           clustered (8 dense balls), polydisperse (radius ratio 10), F and FTS
+//   kind 3  tolerance sweep 1e-2 ... 1e-10, F / FT / FTS, uniform and the dense ball, 4000 spheres:
+//           achieved / requested error, theta and p chosen, time
+// Left out (minutes per product with today's Cartesian expansions): FTS beyond N = 1e5, tolerance
+// 1e-6 beyond 3e4 (F) / 1e4 (FTS). Environment: BENCH_MAX_N (default 1e6; quick 2000), BENCH_THREADS
+// (default 2).
+//   bench_tree [--quick] [--out DIR]
 #include "bench/harness.hpp"
 #include "engine/kernels/far_field.hpp"
 #include "trees/tree_mobility.hpp"
+
 #include <omp.h>
+
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <random>
+#include <string>
+
 using namespace stokesian;
-int main(int argc, char** argv) {
-  long n = std::atol(argv[1]);
-  Moments m = argv[2][0]=='F' && argv[2][1]==0 ? Moments::F : (std::string(argv[2])=="FT"? Moments::FT: Moments::FTS);
-  double phi = std::atof(argv[3]);
-  const double L = std::cbrt(double(n) * 4.19*1.25 / phi);
-  auto cloud = bench::random_cloud(n, L, 5);
-  VecX v = VecX::Random(n * dof_per_particle(m)), yd, yt;
-  double td = n <= 20000 ? bench::time_once([&]{ mobility_product(cloud.x, cloud.a, 1.0, m, v, yd); }) : 0;
-  if (n > 20000) { trees::TreeParameters pr{0.3, 10, 32}; MobilitySpec sp; sp.moments = m; trees::TreeFarField tr(sp, pr); Domain o; tr.set_configuration({cloud.x, cloud.a, o}); tr.apply(v, yd); }
-  std::printf("direct %.3f s\n", td);
-  Domain open;
-  for (int i = 4; i + 3 < argc; i += 4) {
-    trees::TreeParameters p{std::atof(argv[i]), std::atoi(argv[i+1]), std::atoi(argv[i+2]), argv[i+3][0]=='b' ? trees::TreeEvaluation::barnes_hut : trees::TreeEvaluation::fmm};
-    MobilitySpec spec; spec.moments = m;
-    trees::TreeFarField t(spec, p);
-    double tb = bench::time_once([&]{ t.set_configuration({cloud.x, cloud.a, open}); });
-    double ta = bench::time_once([&]{ t.apply(v, yt); });
-    std::printf("theta %.2f p %d leaf %d: build %.3f apply %.3f err %.2e nodes %ld pairs %ld m2l %ld up %.3f down %.3f\n", p.theta, p.order, p.leaf_size, tb, ta,
-      (yt-yd).norm()/yd.norm(), t.last_stats().node_interactions, t.last_stats().pair_interactions, t.last_stats().m2l, t.last_stats().upward_seconds, t.last_stats().downward_seconds);
+using trees::TreeEvaluation;
+using trees::TreeFarField;
+using trees::TreeParameters;
+
+namespace {
+
+struct Cloud {
+  std::vector<Vec3> x;
+  std::vector<double> a;
+};
+
+// kind 0: uniform cube at phi; 1: ball at phi; 2: 8 balls (phi 0.3 each) inside a cube 4x their
+// radius; radii uniform in [a_lo, a_hi] (log-uniform when a_hi / a_lo > 3).
+Cloud make_cloud(int kind, long n, double phi, double a_lo, double a_hi, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  Cloud c;
+  double volume = 0;
+  for (long i = 0; i < n; ++i) {
+    const double a = a_hi / a_lo > 3 ? a_lo * std::pow(a_hi / a_lo, u(rng)) : a_lo + (a_hi - a_lo) * u(rng);
+    c.a.push_back(a);
+    volume += 4.18879020478639 * a * a * a;
   }
+  const double region = volume / phi;
+  if (kind == 0) {
+    const double L = std::cbrt(region);
+    for (long i = 0; i < n; ++i) c.x.emplace_back(L * u(rng), L * u(rng), L * u(rng));
+  } else {
+    const int balls = kind == 1 ? 1 : 8;
+    const double R = std::cbrt(region / balls / 4.18879020478639);
+    for (long i = 0; i < n; ++i) {
+      Vec3 p;
+      do p = Vec3(2 * u(rng) - 1, 2 * u(rng) - 1, 2 * u(rng) - 1);
+      while (p.norm() > 1);
+      Vec3 centre = Vec3::Zero();
+      if (balls > 1) {
+        const int b = int(i % balls);
+        centre = 4 * R * Vec3(b & 1, (b >> 1) & 1, (b >> 2) & 1);
+      }
+      c.x.push_back(centre + R * p);
+    }
+  }
+  return c;
+}
+
+VecX random_vector(long size, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> g;
+  VecX v(size);
+  for (long k = 0; k < size; ++k) v[k] = g(rng);
+  return v;
+}
+
+double rel_error(const VecX& y, const VecX& ref) { return (y - ref).norm() / ref.norm(); }
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const bench::Options opt = bench::parse_options(argc, argv);
+  const bool quick = opt.quick;
+  const double max_n = std::getenv("BENCH_MAX_N") ? std::atof(std::getenv("BENCH_MAX_N")) : (quick ? 3000 : 1e6);
+  const int max_threads =
+      std::min(std::getenv("BENCH_THREADS") ? std::atoi(std::getenv("BENCH_THREADS")) : 2, omp_get_max_threads());
+  const long direct_max = quick ? 2000 : 20000;
+  bench::Results res(quick ? "tree_quick" : "tree");
+  const Domain open;
+
+  // kind 2: error against theta and p.
+  {
+    const long n = quick ? 600 : 3000;
+    const int p_max = quick ? 4 : 10;
+    const std::vector<double> thetas = quick ? std::vector<double>{0.6, 0.4} : std::vector<double>{0.7, 0.6, 0.5, 0.4, 0.3, 0.2};
+    struct Set {
+      int cloud;
+      double a_lo, a_hi;
+      const char* name;
+    };
+    for (const Set& set : {Set{0, 1.0, 1.0, "uniform"}, Set{2, 1.0, 1.0, "clustered"}, Set{0, 0.3, 3.0, "poly10"}}) {
+      const Cloud c = make_cloud(set.cloud, n, set.cloud == 0 ? 0.1 : 0.3, set.a_lo, set.a_hi, 41);
+      for (Moments m : {Moments::F, Moments::FTS}) {
+        const VecX x = random_vector(long(n) * dof_per_particle(m), 5);
+        VecX ref, y;
+        mobility_product(c.x, c.a, 1.0, m, x, ref);
+        for (double theta : thetas) {
+          for (int p = -1; p <= p_max; p += (p < 4 ? 1 : 2)) {
+            // p = -1 stands for Barnes-Hut at order 0 (the thesis's monopole scheme)
+            const TreeParameters tp{theta, std::max(p, 0), 16, p < 0 ? TreeEvaluation::barnes_hut : TreeEvaluation::fmm};
+            MobilitySpec spec;
+            spec.moments = m;
+            TreeFarField op(spec, tp);
+            op.set_configuration({c.x, c.a, open});
+            op.apply(x, y);
+            res.add({{"kind", 2}, {"set", double(set.cloud == 0 && set.a_hi > 1 ? 2 : set.cloud == 2 ? 1 : 0)},
+                     {"N", double(n)}, {"dof", double(dof_per_particle(m))}, {"theta", theta}, {"p", double(p)}},
+                    {{"error", rel_error(y, ref)}});
+          }
+        }
+        std::printf("kind 2 %s %s done\n", set.name, to_string(m));
+        std::fflush(stdout);
+      }
+    }
+  }
+
+  // kind 3: tolerance sweep.
+  {
+    const long n = quick ? 800 : 4000;
+    const std::vector<double> tols = quick ? std::vector<double>{1e-2, 1e-4, 1e-6}
+                                           : std::vector<double>{1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10};
+    for (int cloud : {0, 1}) {
+      const Cloud c = make_cloud(cloud, n, cloud == 0 ? 0.1 : 0.3, 0.5, 1.5, 43);
+      for (Moments m : {Moments::F, Moments::FT, Moments::FTS}) {
+        const VecX x = random_vector(long(n) * dof_per_particle(m), 6);
+        VecX ref, y;
+        mobility_product(c.x, c.a, 1.0, m, x, ref);
+        for (double tol : tols) {
+          MobilitySpec spec{m, 1.0, tol};
+          TreeFarField op(spec);
+          op.set_configuration({c.x, c.a, open});
+          const double t = bench::median_time([&] { op.apply(x, y); }, 1);
+          const double err = rel_error(y, ref);
+          res.add({{"kind", 3}, {"cloud", double(cloud)}, {"N", double(n)}, {"dof", double(dof_per_particle(m))},
+                   {"tol", tol}, {"theta", op.parameters().theta}, {"p", double(op.parameters().order)},
+                   {"threads", double(omp_get_max_threads())}},
+                  {{"error", err}, {"product", t}});
+          std::printf("kind 3 cloud %d %-3s tol %.0e theta %.2f p %2d error %.2e ratio %.3f time %.3f s\n", cloud,
+                      to_string(m), tol, op.parameters().theta, op.parameters().order, err, err / tol, t);
+          std::fflush(stdout);
+        }
+      }
+    }
+  }
+
+  // kind 1: the direct product.
+  for (Moments m : {Moments::F, Moments::FTS}) {
+    for (long n : {1000L, 2000L, 5000L, 10000L, 20000L}) {
+      if (n > direct_max) break;
+      const Cloud c = make_cloud(0, n, 0.1, 0.5, 1.5, 47);
+      const VecX x = random_vector(n * dof_per_particle(m), 7);
+      VecX y;
+      for (int threads = 1; threads <= max_threads; ++threads) {
+        omp_set_num_threads(threads);
+        const double t = bench::median_time([&] { mobility_product(c.x, c.a, 1.0, m, x, y); }, n <= 5000 ? 3 : 1);
+        res.add({{"kind", 1}, {"N", double(n)}, {"dof", double(dof_per_particle(m))}, {"threads", double(threads)}},
+                {{"product", t}});
+        std::printf("kind 1 direct %-3s N %6ld threads %d product %.3f s\n", to_string(m), n, threads, t);
+        std::fflush(stdout);
+      }
+    }
+  }
+  omp_set_num_threads(max_threads);
+
+  // kind 0: scaling.
+  const std::vector<long> sizes = quick ? std::vector<long>{1000, 2000}
+                                        : std::vector<long>{1000, 3000, 10000, 30000, 100000, 300000, 1000000};
+  const std::vector<double> scaling_tols = quick ? std::vector<double>{1e-3} : std::vector<double>{1e-3, 1e-4, 1e-6};
+  for (Moments m : {Moments::F, Moments::FTS}) {
+    for (int cloud : {0, 1}) {
+      for (double tol : scaling_tols) {
+        for (long n : sizes) {
+          if (n > max_n) break;
+          // Products of minutes are left out: FTS beyond 1e5, tolerance 1e-6 beyond 3e4 (F) / 1e4 (FTS).
+          if (m == Moments::FTS && n > 100000) break;
+          if (tol < 1e-5 && n > (m == Moments::FTS ? 10000 : 30000)) break;
+          const Cloud c = make_cloud(cloud, n, cloud == 0 ? 0.1 : 0.3, 0.5, 1.5, 53);
+          const VecX x = random_vector(n * dof_per_particle(m), 8);
+          VecX ref, y;
+          int ref_kind = 0;  // 0 direct, 1 tree at tol / 1000
+          if (n <= direct_max) {
+            mobility_product(c.x, c.a, 1.0, m, x, ref);
+          } else if (n <= 100000 && tol >= 1e-4) {
+            TreeFarField tight(MobilitySpec{m, 1.0, tol * 1e-3});
+            tight.set_configuration({c.x, c.a, open});
+            tight.apply(x, ref);
+            ref_kind = 1;
+          } else {
+            ref_kind = -1;  // no reference
+          }
+          for (int threads = 1; threads <= max_threads; ++threads) {
+            omp_set_num_threads(threads);
+            TreeFarField op(MobilitySpec{m, 1.0, tol});
+            const double t_setup = bench::time_once([&] { op.set_configuration({c.x, c.a, open}); });
+            const double t = bench::median_time([&] { op.apply(x, y); }, n <= 30000 ? 3 : 1);
+            const auto& st = op.last_stats();
+            std::map<std::string, double> phases{{"product", t},
+                                                 {"setup", t_setup},
+                                                 {"upward", st.upward_seconds},
+                                                 {"downward", st.downward_seconds},
+                                                 {"pairs", double(st.pair_interactions)},
+                                                 {"conversions", double(st.m2l)}};
+            if (ref_kind >= 0) phases["error"] = rel_error(y, ref);
+            res.add({{"kind", 0}, {"cloud", double(cloud)}, {"N", double(n)}, {"dof", double(dof_per_particle(m))},
+                     {"tol", tol}, {"threads", double(threads)}, {"ref", double(ref_kind)},
+                     {"theta", op.parameters().theta}, {"p", double(op.parameters().order)}},
+                    phases);
+            std::printf("kind 0 %-3s cloud %d tol %.0e N %7ld threads %d: set-up %.3f product %.3f s (up %.3f down %.3f) "
+                        "pairs/N %.0f conv/N %.1f error %.2e\n",
+                        to_string(m), cloud, tol, n, threads, t_setup, t, st.upward_seconds, st.downward_seconds,
+                        double(st.pair_interactions) / n, double(st.m2l) / n,
+                        ref_kind >= 0 ? phases["error"] : -1.0);
+            std::fflush(stdout);
+          }
+          omp_set_num_threads(max_threads);
+          res.write(opt.out);  // after every block: a long run killed midway keeps its rows
+        }
+      }
+    }
+  }
+  std::printf("wrote %s\n", res.write(opt.out).c_str());
+  return 0;
 }

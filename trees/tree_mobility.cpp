@@ -398,7 +398,7 @@ void TreeFarField::downward(int t, const VecX& in, VecX& out) const {
   if (!T.leaf()) {
     for (int c = 0; c < T.child_count; ++c) {
       const int child = T.first_child + c;
-#pragma omp task default(shared) firstprivate(child) if (tree_.nodes[std::size_t(child)].size() > 256)
+#pragma omp task default(shared) firstprivate(child) if (tree_.nodes[std::size_t(child)].size() > 24)
       downward(child, in, out);
     }
 #pragma omp taskwait
