@@ -9,6 +9,12 @@
 //           clustered (8 dense balls), polydisperse (radius ratio 10), F and FTS
 //   kind 3  tolerance sweep 1e-2 ... 1e-10, F / FT / FTS, uniform and the dense ball, 4000 spheres:
 //           achieved / requested error, theta and p chosen, time
+//   BENCH_TREE_THESIS=1: only the thesis's table 3.1 set-up (chapter 3; docs/tree.md): 37^3 unit
+//           spheres on a cubic grid at phi = 5e-5, 5e-3, 0.25, FT, each sphere pushed by F = -e_z;
+//           Barnes-Hut at p = 0 with theta = theta_thesis / 2 (its criterion compares a group's
+//           diameter with the distance) for theta_thesis = 1, 0.1, and the FMM at tolerances 1e-3,
+//           1e-6: relative error of the mean velocity (the thesis's measure) and of the whole
+//           product against the direct product; written to tree_thesis.json (quick: 11^3).
 // Left out (minutes per product with today's Cartesian expansions): FTS beyond N = 1e5, tolerance
 // 1e-6 beyond 3e4 (F) / 1e4 (FTS). Environment: BENCH_MAX_N (default 1e6; quick 2000), BENCH_THREADS
 // (default 2).
@@ -90,8 +96,53 @@ int main(int argc, char** argv) {
   const int max_threads =
       std::min(std::getenv("BENCH_THREADS") ? std::atoi(std::getenv("BENCH_THREADS")) : 2, omp_get_max_threads());
   const long direct_max = quick ? 2000 : 20000;
-  bench::Results res(quick ? "tree_quick" : "tree");
   const Domain open;
+  if (std::getenv("BENCH_TREE_THESIS")) {
+    bench::Results th(quick ? "tree_thesis_quick" : "tree_thesis");
+    const int side = quick ? 11 : 37;
+    for (double phi : {5e-5, 5e-3, 0.25}) {
+      const double h = std::cbrt(4.18879020478639 / phi);  // grid spacing: one unit sphere per h^3
+      Cloud c;
+      for (int i = 0; i < side; ++i)
+        for (int j = 0; j < side; ++j)
+          for (int k = 0; k < side; ++k) {
+            c.x.emplace_back(h * i, h * j, h * k);
+            c.a.push_back(1.0);
+          }
+      const long n = long(c.x.size());
+      VecX f = VecX::Zero(6 * n);
+      for (long i = 0; i < n; ++i) f[6 * i + 2] = -1.0;
+      VecX ref, y;
+      const double t_direct = bench::time_once([&] { mobility_product(c.x, c.a, 1.0, Moments::FT, f, ref); });
+      auto mean_u = [&](const VecX& v) {
+        Vec3 m = Vec3::Zero();
+        for (long i = 0; i < n; ++i) m += Vec3(v[6 * i], v[6 * i + 1], v[6 * i + 2]);
+        return Vec3(m / double(n));
+      };
+      const Vec3 uref = mean_u(ref);
+      struct Case {
+        double theta_thesis, tol;
+      };
+      for (const Case& cs : {Case{1.0, 0}, Case{0.1, 0}, Case{0, 1e-3}, Case{0, 1e-6}}) {
+        MobilitySpec spec{Moments::FT, 1.0, cs.tol > 0 ? cs.tol : 1e-3};
+        const TreeParameters tp = cs.tol > 0 ? trees::tree_parameters(cs.tol, Moments::FT)
+                                             : TreeParameters{cs.theta_thesis / 2, 0, 16, TreeEvaluation::barnes_hut};
+        TreeFarField op(spec, tp);
+        op.set_configuration({c.x, c.a, open});
+        const double t = bench::time_once([&] { op.apply(f, y); });
+        const double err_mean = (mean_u(y) - uref).norm() / uref.norm();
+        th.add({{"phi", phi}, {"N", double(n)}, {"theta_thesis", cs.theta_thesis}, {"tol", cs.tol},
+                {"theta", tp.theta}, {"p", double(tp.order)}},
+               {{"error_mean_velocity", err_mean}, {"error", rel_error(y, ref)}, {"product", t}, {"direct", t_direct}});
+        std::printf("thesis grid %ld phi %.2g %s theta %.3f p %d: error of <U> %.2e, of the product %.2e, %.2f s (direct %.2f s)\n",
+                    n, phi, cs.tol > 0 ? "fmm" : "barnes-hut", tp.theta, tp.order, err_mean, rel_error(y, ref), t, t_direct);
+        std::fflush(stdout);
+      }
+    }
+    std::printf("wrote %s\n", th.write(opt.out).c_str());
+    return 0;
+  }
+  bench::Results res(quick ? "tree_quick" : "tree");
 
   // kind 2: error against theta and p.
   {
