@@ -22,6 +22,27 @@ MultiIndexSet::MultiIndexSet(int order) : n_(order) {
         for (int q = 2; q <= k; ++q) f *= q;
         fact_.push_back(f);
       }
+  // recurrence of inverse_distance_derivatives as a table (absent neighbours: index 0, weight 0)
+  recurrence_.resize(alpha_.size());
+  for (std::size_t k = 1; k < alpha_.size(); ++k) {
+    const auto& al = alpha_[k];
+    const int n = total_[k];
+    Recurrence& rc = recurrence_[k];
+    for (int c = 0; c < 3; ++c) {
+      const int ac = al[std::size_t(c)];
+      std::array<int, 3> b = al;
+      if (ac >= 1) {
+        --b[std::size_t(c)];
+        rc.first[c] = index(b[0], b[1], b[2]);
+        rc.first_weight[c] = double((2 * n - 1) * ac) / n;
+      }
+      if (ac >= 2) {
+        --b[std::size_t(c)];
+        rc.second[c] = index(b[0], b[1], b[2]);
+        rc.second_weight[c] = double((n - 1) * ac * (ac - 1)) / n;
+      }
+    }
+  }
   plus_.resize(3 * alpha_.size());
   for (std::size_t k = 0; k < alpha_.size(); ++k)
     for (int d = 0; d < 3; ++d) {
@@ -34,23 +55,15 @@ MultiIndexSet::MultiIndexSet(int order) : n_(order) {
 void inverse_distance_derivatives(const Vec3& R, const MultiIndexSet& set, double* d) {
   const double r2 = R.squaredNorm();
   assert(r2 > 0);
-  const double inv_r2 = 1.0 / r2;
+  const double inv_r2 = 1.0 / r2, x = R[0], y = R[1], z = R[2];
   d[0] = std::sqrt(inv_r2);
-  for (int k = 1; k < set.size(); ++k) {
-    const auto& al = set[k];
-    const int n = set.total(k);
-    double acc = 0;
-    for (int c = 0; c < 3; ++c) {
-      if (al[std::size_t(c)] == 0) continue;
-      std::array<int, 3> b = al;
-      --b[std::size_t(c)];
-      acc += (2 * n - 1) * al[std::size_t(c)] * R[c] * d[set.index(b[0], b[1], b[2])];
-      if (al[std::size_t(c)] >= 2) {
-        --b[std::size_t(c)];
-        acc += (n - 1) * al[std::size_t(c)] * (al[std::size_t(c)] - 1) * d[set.index(b[0], b[1], b[2])];
-      }
-    }
-    d[k] = -acc * inv_r2 / n;
+  const int size = set.size();
+  for (int k = 1; k < size; ++k) {
+    const MultiIndexSet::Recurrence& rc = set.recurrence(k);
+    const double acc = rc.first_weight[0] * x * d[rc.first[0]] + rc.first_weight[1] * y * d[rc.first[1]] +
+                       rc.first_weight[2] * z * d[rc.first[2]] + rc.second_weight[0] * d[rc.second[0]] +
+                       rc.second_weight[1] * d[rc.second[1]] + rc.second_weight[2] * d[rc.second[2]];
+    d[k] = -acc * inv_r2;
   }
 }
 

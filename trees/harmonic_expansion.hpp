@@ -37,6 +37,13 @@ class MultiIndexSet {
   }
   // Position of alpha_k + e_d, -1 beyond the order.
   int plus(int k, int d) const { return plus_[std::size_t(3 * k + d)]; }
+  // The recurrence below for alpha_k as a table: D_alpha = -(sum_d first_weight_d R_d D_first_d +
+  // sum_d second_weight_d D_second_d) / |R|^2 (absent neighbours have weight 0 and index 0).
+  struct Recurrence {
+    int first[3] = {0, 0, 0}, second[3] = {0, 0, 0};
+    double first_weight[3] = {0, 0, 0}, second_weight[3] = {0, 0, 0};
+  };
+  const Recurrence& recurrence(int k) const { return recurrence_[std::size_t(k)]; }
 
  private:
   int n_;
@@ -45,6 +52,7 @@ class MultiIndexSet {
   std::vector<double> fact_;
   std::vector<int> lookup_;
   std::vector<int> plus_;
+  std::vector<Recurrence> recurrence_;
 };
 
 // d[k] = d^{alpha_k} (1/|R|) for every alpha_k of `set` (d has set.size() entries); R != 0.

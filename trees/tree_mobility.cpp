@@ -17,6 +17,8 @@ namespace {
 int derivative_order(Moments m) { return m == Moments::FTS ? 3 : 2; }
 
 constexpr double kPi = 3.14159265358979323846;
+// Potentials per expansion (phi_x, phi_y, phi_z, psi), stored interleaved: E[index * kPot + pot].
+constexpr int kPot = 4;
 
 // Positions in a multi-index set of order >= 3 of the first, second and third unit derivatives.
 struct DerivativeIndex {
@@ -92,6 +94,87 @@ void add_pairs(const std::vector<int>& order, int begin, int end, int i, const s
     mobility::apply_pair(mobility::pair_scalars(a[std::size_t(i)], a[std::size_t(j)], r, mu, m), e, m,
                          in.data() + long(j) * d, yi);
     ++count;
+  }
+}
+
+// Near pairs of the fmm path, F and FT (the hot loop): sources in tree order as separate
+// coordinate arrays, so that the loop over a source leaf vectorises. Separated pairs (r >= a_i + a_j)
+// use the closed forms of engine/kernels/mobility_pair.cpp (separated_scalars), with d = x_i - x_j,
+// u = 1/r, c = (a_i^2 + a_j^2)/3 and k = 1/(8 pi mu):
+//   U_i += k [u (1 + c u^2) F + u^3 (1 - 3 c u^2) (d.F) d + u^3 T x d],
+//   W_i += k [u^3 F x d - u^3/2 T + 3/2 u^5 (d.T) d];
+// the other pairs (overlapping, nested; rare) go through mobility::pair_scalars. The sum over
+// [begin, end) skips the target's own position qi.
+void add_pairs_sorted(const SortedSources& src, int begin, int end, int qi, double ai, double mu, Moments m,
+                      double* yi, long& count) {
+  const double xi = src.x[std::size_t(qi)], yc = src.y[std::size_t(qi)], zi = src.z[std::size_t(qi)];
+  const double ai2 = ai * ai, k = 1.0 / (8.0 * kPi * mu);
+  const double* X = src.x.data();
+  const double* Y = src.y.data();
+  const double* Z = src.z.data();
+  const double* A = src.a.data();
+  const double *F0 = src.in[0].data(), *F1 = src.in[1].data(), *F2 = src.in[2].data();
+  double u0 = 0, u1 = 0, u2 = 0;
+  int close = 0;
+  if (m == Moments::F) {
+#pragma omp simd reduction(+ : u0, u1, u2) reduction(+ : close)
+    for (int q = begin; q < end; ++q) {
+      const double dx = xi - X[q], dy = yc - Y[q], dz = zi - Z[q];
+      const double r2 = dx * dx + dy * dy + dz * dz, sum = ai + A[q];
+      const bool sep = r2 >= sum * sum;
+      close += !sep && q != qi;
+      const double u = sep ? 1.0 / std::sqrt(r2) : 0.0, uu = u * u;
+      const double c = (ai2 + A[q] * A[q]) * (1.0 / 3.0) * uu;
+      const double b = u * uu * (1.0 - 3.0 * c) * (dx * F0[q] + dy * F1[q] + dz * F2[q]);
+      const double f = u * (1.0 + c);
+      u0 += f * F0[q] + b * dx;
+      u1 += f * F1[q] + b * dy;
+      u2 += f * F2[q] + b * dz;
+    }
+    yi[0] += k * u0;
+    yi[1] += k * u1;
+    yi[2] += k * u2;
+  } else {
+    const double *T0 = src.in[3].data(), *T1 = src.in[4].data(), *T2 = src.in[5].data();
+    double w0 = 0, w1 = 0, w2 = 0;
+#pragma omp simd reduction(+ : u0, u1, u2, w0, w1, w2) reduction(+ : close)
+    for (int q = begin; q < end; ++q) {
+      const double dx = xi - X[q], dy = yc - Y[q], dz = zi - Z[q];
+      const double r2 = dx * dx + dy * dy + dz * dz, sum = ai + A[q];
+      const bool sep = r2 >= sum * sum;
+      close += !sep && q != qi;
+      const double u = sep ? 1.0 / std::sqrt(r2) : 0.0, uu = u * u, u3 = u * uu;
+      const double c = (ai2 + A[q] * A[q]) * (1.0 / 3.0) * uu;
+      const double b = u3 * (1.0 - 3.0 * c) * (dx * F0[q] + dy * F1[q] + dz * F2[q]);
+      const double f = u * (1.0 + c);
+      const double t = 1.5 * u3 * uu * (dx * T0[q] + dy * T1[q] + dz * T2[q]);
+      // T x d and F x d
+      u0 += f * F0[q] + b * dx + u3 * (T1[q] * dz - T2[q] * dy);
+      u1 += f * F1[q] + b * dy + u3 * (T2[q] * dx - T0[q] * dz);
+      u2 += f * F2[q] + b * dz + u3 * (T0[q] * dy - T1[q] * dx);
+      w0 += u3 * (F1[q] * dz - F2[q] * dy) - 0.5 * u3 * T0[q] + t * dx;
+      w1 += u3 * (F2[q] * dx - F0[q] * dz) - 0.5 * u3 * T1[q] + t * dy;
+      w2 += u3 * (F0[q] * dy - F1[q] * dx) - 0.5 * u3 * T2[q] + t * dz;
+    }
+    yi[0] += k * u0;
+    yi[1] += k * u1;
+    yi[2] += k * u2;
+    yi[3] += k * w0;
+    yi[4] += k * w1;
+    yi[5] += k * w2;
+  }
+  count += end - begin - (qi >= begin && qi < end ? 1 : 0);
+  if (!close) return;
+  const int d = dof_per_particle(m);
+  for (int q = begin; q < end; ++q) {
+    if (q == qi) continue;
+    const Vec3 rij(xi - X[q], yc - Y[q], zi - Z[q]);
+    const double r = rij.norm();
+    if (r >= ai + A[q]) continue;
+    const Vec3 e = r > 0 ? Vec3(rij / r) : Vec3::UnitZ();
+    double xj[6];
+    for (int c = 0; c < d; ++c) xj[c] = src.in[c][std::size_t(q)];
+    mobility::apply_pair(mobility::pair_scalars(ai, A[q], r, mu, m), e, m, xj, yi);
   }
 }
 
@@ -191,12 +274,43 @@ TreeFarField::TreeFarField(const MobilitySpec& spec, const TreeParameters& param
     for (int g = 0; g < nl; ++g) {
       const auto& al = deriv_set_[g];
       const int sum = deriv_set_.index(al[0] + be[0], al[1] + be[1], al[2] + be[2]);
-      if (sum < 0) continue;
-      shift_terms_.push_back({b, g, sum});
-      if (g < ng) m2l_terms_.push_back({b, g, sum});
+      if (sum >= 0) shift_terms_.push_back({b, g, sum});
     }
   }
   shift_begin_.push_back(int(shift_terms_.size()));
+  // Harmonic reduction of the conversion (every D_alpha is harmonic in alpha: D_(alpha + 2e_z) =
+  // -D_(alpha + 2e_x) - D_(alpha + 2e_y)). Moments with gamma_z >= 2 are folded onto gamma - 2e_z +
+  // 2e_x and gamma - 2e_z + 2e_y (same order, highest gamma_z first); only locals with beta_z <= 1
+  // are converted, the others rebuilt by the same identity (lowest beta_z first). Both are exact
+  // for the truncated sums (the folded indices have the same order), and cut the terms of one
+  // conversion from ~p^6/36 to ~p^4/3 (conversion_terms).
+  for (int g = ng - 1; g >= 0; --g) {
+    const auto& al = moment_set_[g];
+    if (al[2] >= 2)
+      moment_fold_.push_back({g, moment_set_.index(al[0] + 2, al[1], al[2] - 2), moment_set_.index(al[0], al[1] + 2, al[2] - 2)});
+  }
+  std::stable_sort(moment_fold_.begin(), moment_fold_.end(), [&](const auto& u, const auto& v) {
+    return moment_set_[u[0]][2] > moment_set_[v[0]][2];
+  });
+  for (int b = 0; b < nl; ++b) {
+    const auto& be = deriv_set_[b];
+    if (be[2] >= 2)
+      local_rebuild_.push_back({b, deriv_set_.index(be[0] + 2, be[1], be[2] - 2), deriv_set_.index(be[0], be[1] + 2, be[2] - 2)});
+  }
+  std::stable_sort(local_rebuild_.begin(), local_rebuild_.end(), [&](const auto& u, const auto& v) {
+    return deriv_set_[u[0]][2] < deriv_set_[v[0]][2];
+  });
+  m2l_term_begin_.push_back(0);
+  for (int b = 0; b < nl; ++b) {
+    const auto& be = deriv_set_[b];
+    if (be[2] <= 1)
+      for (int g = 0; g < ng; ++g) {
+        const auto& al = moment_set_[g];
+        const int sum = deriv_set_.index(al[0] + be[0], al[1] + be[1], al[2] + be[2]);
+        if (al[2] <= 1 && sum >= 0) m2l_terms_.push_back({g, sum});
+      }
+    m2l_term_begin_.push_back(int(m2l_terms_.size()));
+  }
 }
 
 void TreeFarField::set_configuration(const Configuration& c) {
@@ -204,9 +318,21 @@ void TreeFarField::set_configuration(const Configuration& c) {
   x_ = c.x;
   a_ = c.a;
   tree_ = build_octree(x_, a_, p_.leaf_size);
-  moments_.assign(tree_.nodes.size() * 4 * std::size_t(moment_set_.size()), 0.0);
+  const std::size_t n = x_.size();
+  sorted_.x.resize(n);
+  sorted_.y.resize(n);
+  sorted_.z.resize(n);
+  sorted_.a.resize(n);
+  for (std::size_t q = 0; q < n; ++q) {
+    const std::size_t i = std::size_t(tree_.order[q]);
+    sorted_.x[q] = x_[i].x();
+    sorted_.y[q] = x_[i].y();
+    sorted_.z[q] = x_[i].z();
+    sorted_.a[q] = a_[i];
+  }
+  moments_.assign(tree_.nodes.size() * kPot * std::size_t(moment_set_.size()), 0.0);
   if (p_.evaluation == TreeEvaluation::fmm) {
-    locals_.assign(tree_.nodes.size() * 4 * std::size_t(deriv_set_.size()), 0.0);
+    locals_.assign(tree_.nodes.size() * kPot * std::size_t(deriv_set_.size()), 0.0);
     build_interaction_lists();
   }
 }
@@ -272,8 +398,8 @@ void TreeFarField::compute_moments(const VecX& in) const {
 #pragma omp for schedule(dynamic, 4)
     for (long k = 0; k < nodes; ++k) {
       const OctreeNode& node = tree_.nodes[std::size_t(k)];
-      double* M = moments_.data() + std::size_t(k) * 4 * std::size_t(ng);
-      std::fill(M, M + 4 * ng, 0.0);
+      double* M = moments_.data() + std::size_t(k) * kPot * std::size_t(ng);
+      std::fill(M, M + kPot * ng, 0.0);
       for (int q = node.begin; q < node.end; ++q) {
         const std::size_t i = std::size_t(tree_.order[std::size_t(q)]);
         const double* src = in.data() + long(i) * d;
@@ -304,18 +430,18 @@ void TreeFarField::compute_moments(const VecX& in) const {
         scaled_powers(s, moment_set_, w.data());
         for (int g = 0; g < ng; ++g) {
           const double wg = w[std::size_t(g)];
-          for (int j = 0; j < 3; ++j) M[j * ng + g] += F[j] * wg;
-          M[3 * ng + g] += psi_charge * wg;
+          for (int j = 0; j < 3; ++j) M[g * kPot + j] += F[j] * wg;
+          M[g * kPot + 3] += psi_charge * wg;
           // dipoles: coefficient -moment_l w_g at g + e_l
           for (int l = 0; l < 3; ++l) {
             const int gl = moment_set_.plus(g, l);
             if (gl < 0) continue;
-            for (int j = 0; j < 3; ++j) M[j * ng + gl] -= D(j, l) * wg;
-            M[3 * ng + gl] -= psi_dipole[l] * wg;
+            for (int j = 0; j < 3; ++j) M[gl * kPot + j] -= D(j, l) * wg;
+            M[gl * kPot + 3] -= psi_dipole[l] * wg;
             if (stresslet)
               for (int jj = 0; jj < 3; ++jj) {
                 const int gjl = moment_set_.plus(gl, jj);
-                if (gjl >= 0) M[3 * ng + gjl] += Q(jj, l) * wg;
+                if (gjl >= 0) M[gjl * kPot + 3] += Q(jj, l) * wg;
               }
           }
         }
@@ -345,6 +471,25 @@ void TreeFarField::apply(const VecX& in, VecX& out) const {
 
 void TreeFarField::apply_fmm(const VecX& in, VecX& out) const {
   stats_ = TreeProductStats{};
+  {
+    const std::size_t ng = std::size_t(moment_set_.size()), nodes = tree_.nodes.size();
+    for (std::size_t k = 0; k < nodes; ++k) {
+      double* M = moments_.data() + k * kPot * ng;
+      for (const auto& f : moment_fold_)
+        for (int pot = 0; pot < kPot; ++pot) {
+          M[kPot * f[1] + pot] -= M[kPot * f[0] + pot];
+          M[kPot * f[2] + pot] -= M[kPot * f[0] + pot];
+          M[kPot * f[0] + pot] = 0;
+        }
+    }
+  }
+  if (m_ != Moments::FTS) {
+    const int d = dof_per_particle(m_);
+    const std::size_t n = x_.size();
+    for (int c = 0; c < d; ++c) sorted_.in[c].resize(n);
+    for (std::size_t q = 0; q < n; ++q)
+      for (int c = 0; c < d; ++c) sorted_.in[c][q] = in[long(tree_.order[q]) * d + c];
+  }
   pair_count_ = 0;
   long m2l_count = 0;
   for (std::size_t k = 0; k + 1 < m2l_begin_.size(); ++k) m2l_count += m2l_begin_[k + 1] - m2l_begin_[k];
@@ -360,39 +505,61 @@ void TreeFarField::apply_fmm(const VecX& in, VecX& out) const {
 void TreeFarField::downward(int t, const VecX& in, VecX& out) const {
   const int ng = moment_set_.size(), nl = deriv_set_.size();
   const OctreeNode& T = tree_.nodes[std::size_t(t)];
-  double* L = locals_.data() + std::size_t(t) * 4 * std::size_t(nl);
-  std::fill(L, L + 4 * nl, 0.0);
-  std::vector<double> tmp(static_cast<std::size_t>(4 * nl));
-  if (parent_[std::size_t(t)] >= 0) {
-    const int par = parent_[std::size_t(t)];
-    const double* LP = locals_.data() + std::size_t(par) * 4 * std::size_t(nl);
-    const Vec3 shift = T.centre - tree_.nodes[std::size_t(par)].centre;
-    // L_beta = sum_delta LP_(beta + delta) shift^delta / delta!  (scaled_powers takes -shift)
-    scaled_powers(-shift, deriv_set_, tmp.data());
-    for (const auto& term : shift_terms_) {
-      const double w = tmp[std::size_t(term[1])];
-      for (int pot = 0; pot < 4; ++pot) L[pot * nl + term[0]] += LP[pot * nl + term[2]] * w;
-    }
-    // psi about the child's centre: + (c_parent - c_child)_j phi_j
-    for (int b = 0; b < nl; ++b)
-      for (int j = 0; j < 3; ++j) L[3 * nl + b] -= shift[j] * L[j * nl + b];
-  }
+  double* L = locals_.data() + std::size_t(t) * kPot * std::size_t(nl);
+  std::fill(L, L + kPot * nl, 0.0);
+  std::vector<double> tmp(static_cast<std::size_t>(nl));
+  // conversions of the list (locals with beta_z <= 1), psi about the target's centre:
+  // + (c_S - c_T)_j phi_j
   std::vector<double> D(static_cast<std::size_t>(nl));
   for (int q = m2l_begin_[std::size_t(t)]; q < m2l_begin_[std::size_t(t) + 1]; ++q) {
     const int s = m2l_source_[std::size_t(q)];
     const OctreeNode& S = tree_.nodes[std::size_t(s)];
-    const double* M = moments_.data() + std::size_t(s) * 4 * std::size_t(ng);
+    const double* M = moments_.data() + std::size_t(s) * kPot * std::size_t(ng);
     const Vec3 R = T.centre - S.centre;
     inverse_distance_derivatives(R, deriv_set_, D.data());
-    std::fill(tmp.begin(), tmp.end(), 0.0);
-    for (const auto& term : m2l_terms_) {
-      const double dv = D[std::size_t(term[2])];
-      for (int pot = 0; pot < 4; ++pot) tmp[std::size_t(pot * nl + term[0])] += M[pot * ng + term[1]] * dv;
-    }
-    // psi about the target's centre: + (c_S - c_T)_j phi_j
     for (int b = 0; b < nl; ++b) {
-      for (int pot = 0; pot < 4; ++pot) L[pot * nl + b] += tmp[std::size_t(pot * nl + b)];
-      for (int j = 0; j < 3; ++j) L[3 * nl + b] -= R[j] * tmp[std::size_t(j * nl + b)];
+      const int k0 = m2l_term_begin_[std::size_t(b)], k1 = m2l_term_begin_[std::size_t(b) + 1];
+      if (k0 == k1) continue;
+      double a0 = 0, a1 = 0, a2 = 0, a3 = 0;
+      for (int k = k0; k < k1; ++k) {
+        const auto& term = m2l_terms_[std::size_t(k)];
+        const double dv = D[std::size_t(term[1])];
+        const double* m = M + kPot * term[0];
+        a0 += m[0] * dv;
+        a1 += m[1] * dv;
+        a2 += m[2] * dv;
+        a3 += m[3] * dv;
+      }
+      double* l = L + kPot * b;
+      l[0] += a0;
+      l[1] += a1;
+      l[2] += a2;
+      l[3] += a3 - (R[0] * a0 + R[1] * a1 + R[2] * a2);
+    }
+  }
+  if (m2l_begin_[std::size_t(t)] < m2l_begin_[std::size_t(t) + 1])
+    for (const auto& r : local_rebuild_)
+      for (int pot = 0; pot < kPot; ++pot) L[kPot * r[0] + pot] = -L[kPot * r[1] + pot] - L[kPot * r[2] + pot];
+  if (parent_[std::size_t(t)] >= 0) {
+    const int par = parent_[std::size_t(t)];
+    const double* LP = locals_.data() + std::size_t(par) * kPot * std::size_t(nl);
+    const Vec3 shift = T.centre - tree_.nodes[std::size_t(par)].centre;
+    // L_beta += sum_delta LP_(beta + delta) shift^delta / delta!  (scaled_powers takes -shift),
+    // then psi about the child's centre: + (c_parent - c_child)_j phi_j
+    scaled_powers(-shift, deriv_set_, tmp.data());
+    std::vector<double> Ls(static_cast<std::size_t>(kPot * nl), 0.0);
+    for (const auto& term : shift_terms_) {
+      const double w = tmp[std::size_t(term[1])];
+      const double* lp = LP + kPot * term[2];
+      double* l = Ls.data() + kPot * term[0];
+      for (int pot = 0; pot < kPot; ++pot) l[pot] += lp[pot] * w;
+    }
+    for (int b = 0; b < nl; ++b) {
+      const double* l = Ls.data() + kPot * b;
+      L[kPot * b] += l[0];
+      L[kPot * b + 1] += l[1];
+      L[kPot * b + 2] += l[2];
+      L[kPot * b + 3] += l[3] - (shift[0] * l[0] + shift[1] * l[1] + shift[2] * l[2]);
     }
   }
   if (!T.leaf()) {
@@ -425,7 +592,7 @@ void TreeFarField::downward(int t, const VecX& in, VecX& out) const {
       for (int k = shift_begin_[std::size_t(bb)]; k < shift_begin_[std::size_t(bb) + 1]; ++k) {
         const auto& term = shift_terms_[std::size_t(k)];
         const double w = tmp[std::size_t(term[1])];
-        for (int pot = 0; pot < 4; ++pot) P[std::size_t(pot * nb + b)] += L[pot * nl + term[2]] * w;
+        for (int pot = 0; pot < kPot; ++pot) P[std::size_t(pot * nb + b)] += L[kPot * term[2] + pot] * w;
       }
     }
     double y[11] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0};
@@ -433,7 +600,10 @@ void TreeFarField::downward(int t, const VecX& in, VecX& out) const {
     for (int r = 0; r < d; ++r) yi[r] += scale * y[r];
     for (int k = p2p_begin_[std::size_t(t)]; k < p2p_begin_[std::size_t(t) + 1]; ++k) {
       const OctreeNode& S = tree_.nodes[std::size_t(p2p_source_[std::size_t(k)])];
-      add_pairs(tree_.order, S.begin, S.end, i, x_, a_, mu_, m_, in, yi, pairs);
+      if (m_ == Moments::FTS)
+        add_pairs(tree_.order, S.begin, S.end, i, x_, a_, mu_, m_, in, yi, pairs);
+      else
+        add_pairs_sorted(sorted_, S.begin, S.end, q, ai, mu_, m_, yi, pairs);
     }
   }
 #pragma omp atomic
@@ -480,10 +650,10 @@ void TreeFarField::apply_barnes_hut(const VecX& in, VecX& out) const {
         }
         ++node_count;
         inverse_distance_derivatives(R, deriv_set_, D.data());
-        const double* M = moments_.data() + std::size_t(k) * 4 * std::size_t(ng);
+        const double* M = moments_.data() + std::size_t(k) * kPot * std::size_t(ng);
         std::fill(P.begin(), P.end(), 0.0);
         for (int g = 0; g < ng; ++g) {
-          const double m0 = M[g], m1 = M[ng + g], m2 = M[2 * ng + g], m3 = M[3 * ng + g];
+          const double m0 = M[kPot * g], m1 = M[kPot * g + 1], m2 = M[kPot * g + 2], m3 = M[kPot * g + 3];
           const int* si = sum_index_.data() + std::size_t(g * nb);
           for (int b = 0; b < nb; ++b) {
             const double dv = D[std::size_t(si[b])];

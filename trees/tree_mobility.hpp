@@ -84,6 +84,12 @@ struct TreeProductStats {
   double downward_seconds = 0; // conversions, shifts, evaluation at the targets and near pairs
 };
 
+// Positions, radii and (F, FT) inputs in tree order, one array per component (the near-pair loop).
+struct SortedSources {
+  std::vector<double> x, y, z, a;
+  std::vector<double> in[6];
+};
+
 class TreeFarField final : public stokesian::MobilityOperator {
  public:
   // Knobs from spec.tolerance (tree_parameters), or given explicitly.
@@ -115,17 +121,23 @@ class TreeFarField final : public stokesian::MobilityOperator {
   MultiIndexSet beta_set_;    // order k
   std::vector<int> sum_index_;  // index in deriv_set_ of (gamma + beta), gamma x beta
   // Local expansions have the order q of deriv_set_. Shift terms (beta, delta, beta + delta) with
-  // |beta + delta| <= q, grouped by beta; conversion terms (beta, gamma, beta + gamma), |gamma| <= p.
-  std::vector<std::array<int, 3>> shift_terms_, m2l_terms_;
-  std::vector<int> shift_begin_;  // terms of beta: shift_terms_[shift_begin_[beta] ..)
+  // |beta + delta| <= q, grouped by beta; conversion terms (gamma, beta + gamma), |gamma| <= p,
+  // grouped by beta.
+  std::vector<std::array<int, 3>> shift_terms_;
+  std::vector<std::array<int, 2>> m2l_terms_;
+  std::vector<int> shift_begin_;     // terms of beta: shift_terms_[shift_begin_[beta] ..)
+  std::vector<int> m2l_term_begin_;  // terms of beta: m2l_terms_[m2l_term_begin_[beta] ..)
+  // harmonic reduction: (gamma, gamma - 2e_z + 2e_x, gamma - 2e_z + 2e_y), likewise for beta
+  std::vector<std::array<int, 3>> moment_fold_, local_rebuild_;
   // fmm interaction lists per target node (CSR): sources converted (m2l) and leaf pairs (p2p)
   std::vector<int> m2l_begin_, m2l_source_, p2p_begin_, p2p_source_;
   std::vector<int> parent_;
-  mutable std::vector<double> locals_;   // per node: 4 potentials x deriv_set_.size()
+  mutable std::vector<double> locals_;   // per node: deriv_set_.size() x 4 potentials (interleaved)
   std::vector<Vec3> x_;
   std::vector<double> a_;
   Octree tree_;
-  mutable std::vector<double> moments_;  // per node: 4 potentials x moment_set_.size()
+  mutable SortedSources sorted_;
+  mutable std::vector<double> moments_;  // per node: moment_set_.size() x 4 potentials (interleaved)
   mutable TreeProductStats stats_;
   mutable long pair_count_ = 0;
 };
