@@ -182,15 +182,19 @@ void add_pairs_sorted(const SortedSources& src, int begin, int end, int qi, doub
 
 namespace {
 
-// Terms of one conversion: (beta, gamma) with |gamma| <= p, |beta + gamma| <= p + k.
+// Terms of one conversion after the harmonic reduction: gamma with gamma_z <= 1 and |gamma| <= p
+// (2m + 1 of order m), beta with beta_z <= 1 and |beta + gamma| <= p + k.
 double conversion_terms(int p, int k) {
   double t = 0;
-  for (int g = 0; g <= p; ++g) {
-    const int q = p + k - g;
-    t += 0.5 * (g + 1) * (g + 2) * (q + 1) * (q + 2) * (q + 3) / 6.0;
-  }
+  for (int m = 0; m <= p; ++m) t += (2.0 * m + 1) * (p + k - m + 1) * (p + k - m + 1);
   return t;
 }
+
+// Unit costs on one thread (measured with bench-like uniform clouds, N = 3e4, 2026-11-25; docs/tree.md):
+// a near pair (F: the vectorised closed form; FT likewise; FTS: the general pair kernel) and one
+// conversion (0.22 us of derivatives and bookkeeping + 1.37 ns per term).
+double pair_seconds(Moments m) { return m == Moments::F ? 8.5e-9 : (m == Moments::FT ? 17e-9 : 50e-9); }
+double conversion_seconds(int p, Moments m) { return 0.22e-6 + 1.37e-9 * conversion_terms(p, derivative_order(m)); }
 
 }  // namespace
 
@@ -203,11 +207,8 @@ namespace {
 
 // Modelled seconds per particle of one product (fmm), one thread.
 double cost_per_particle(const TreeParameters& p, Moments m) {
-  const double c_pair = m == Moments::F ? 13e-9 : (m == Moments::FT ? 25e-9 : 50e-9);
-  const double c_term = 0.8e-9, c_conv = 1e-6;
   const double x = p.theta / 0.5;
-  return 408 * std::pow(x, -2.9) * c_pair +
-         31.4 * std::pow(x, -2.1) * (conversion_terms(p.order, derivative_order(m)) * c_term + c_conv);
+  return 1770 * std::pow(x, -2.5) * pair_seconds(m) + 10.8 * std::pow(x, -2.05) * conversion_seconds(p.order, m);
 }
 
 }  // namespace
@@ -217,7 +218,7 @@ double tree_product_seconds(const TreeParameters& p, Moments m, double n) { retu
 double tree_memory_bytes(const TreeParameters& p, Moments m, double n) {
   const double nodes = std::max(1.0, n / 4);
   const double expansion = 4.0 * (multi_index_count(p.order) + multi_index_count(p.order + derivative_order(m)));
-  const double lists = 31.4 * std::pow(p.theta / 0.5, -2.1) * n / 4 + 2 * nodes;  // conversion and pair lists
+  const double lists = 10.8 * std::pow(p.theta / 0.5, -2.05) * n + 2 * nodes;  // conversion and pair lists
   return nodes * (8.0 * expansion + sizeof(OctreeNode) + 16.0) + 4.0 * lists + (4.0 + 32.0) * n;
 }
 
@@ -229,7 +230,7 @@ TreeParameters tree_parameters(double tolerance, Moments m) {
   for (int step = 0; step <= 9; ++step) {
     TreeParameters p;
     p.theta = 0.15 + 0.05 * step;
-    p.leaf_size = 32;
+    p.leaf_size = 0;  // tuned per configuration
     p.evaluation = TreeEvaluation::fmm;
     for (p.order = 0; p.order <= 20 && tree_error_model(p, m) > tolerance; ++p.order) {
     }
@@ -256,7 +257,7 @@ TreeFarField::TreeFarField(const MobilitySpec& spec, const TreeParameters& param
     throw std::invalid_argument("tree far field: theta " + std::to_string(p_.theta) + " outside (0, 1)");
   if (p_.order < 0 || p_.order > 30)
     throw std::invalid_argument("tree far field: order " + std::to_string(p_.order) + " outside [0, 30]");
-  if (p_.leaf_size < 1) throw std::invalid_argument("tree far field: leaf size < 1");
+  if (p_.leaf_size < 0) throw std::invalid_argument("tree far field: leaf size < 0");
   const int ng = moment_set_.size(), nb = beta_set_.size();
   sum_index_.resize(std::size_t(ng * nb));
   for (int g = 0; g < ng; ++g)
@@ -317,7 +318,31 @@ void TreeFarField::set_configuration(const Configuration& c) {
   if (c.domain.periodic()) throw std::invalid_argument("tree far field: the domain is periodic (use ewald or pme)");
   x_ = c.x;
   a_ = c.a;
-  tree_ = build_octree(x_, a_, p_.leaf_size);
+  // Leaf size: given, or tuned (fmm): the candidates' trees and lists are built and the one of least
+  // modelled cost (pairs x pair_seconds + conversions x conversion_seconds) is kept; re-tuned when N
+  // changes and every kRetune configurations. Deterministic (counts, not timings).
+  constexpr long kRetune = 32;
+  if (p_.leaf_size > 0 || p_.evaluation != TreeEvaluation::fmm) {
+    leaf_size_ = p_.leaf_size > 0 ? p_.leaf_size : 32;
+  } else if (x_.size() != tuned_n_ || ++since_tuned_ >= kRetune) {
+    double best = -1;
+    for (int leaf : {32, 64, 128}) {
+      tree_ = build_octree(x_, a_, leaf);
+      build_interaction_lists();
+      double pairs = 0;
+      for (std::size_t t = 0; t + 1 < p2p_begin_.size(); ++t)
+        for (int k = p2p_begin_[t]; k < p2p_begin_[t + 1]; ++k)
+          pairs += double(tree_.nodes[t].size()) * tree_.nodes[std::size_t(p2p_source_[std::size_t(k)])].size();
+      const double cost = pairs * pair_seconds(m_) + double(m2l_source_.size()) * conversion_seconds(p_.order, m_);
+      if (best < 0 || cost < best) {
+        best = cost;
+        leaf_size_ = leaf;
+      }
+    }
+    tuned_n_ = x_.size();
+    since_tuned_ = 0;
+  }
+  tree_ = build_octree(x_, a_, leaf_size_);
   const std::size_t n = x_.size();
   sorted_.x.resize(n);
   sorted_.y.resize(n);

@@ -49,19 +49,22 @@ enum class TreeEvaluation { fmm, barnes_hut };
 struct TreeParameters {
   double theta = 0.5;  // opening angle
   int order = 4;       // expansion order p >= 0
-  int leaf_size = 32;  // largest particle count of a leaf
+  int leaf_size = 32;  // largest particle count of a leaf; 0: tuned per configuration (fmm)
   TreeEvaluation evaluation = TreeEvaluation::fmm;
 };
 
 // The knobs from the requested relative accuracy t of a product (MobilitySpec::tolerance), the one
-// place where they are derived (docs/tree.md, "Knobs from the tolerance"). FMM evaluation, leaf
-// size 32; theta in {0.15, 0.2, ..., 0.6} and the smallest p in [0, 20] whose error model
+// place where they are derived (docs/tree.md, "Knobs from the tolerance"). FMM evaluation;
+// theta in {0.15, 0.2, ..., 0.6} and the smallest p in [0, 20] whose error model
 //     e(theta, p) = C (p + 1)^s theta^(p+1)   (F, FT: C = 0.1, s = 0; FTS: C = 0.05, s = 1)
 // stays at or below t, choosing the pair of least modelled cost per particle
-//     n_pair(theta) c_pair + n_conv(theta) (terms(p) c_term + c_conv),
-// n_pair = 408 (theta/0.5)^-2.9 near pairs and n_conv = 31.4 (theta/0.5)^-2.1 conversions per
-// particle (counted at N = 3e4, phi = 0.1), terms(p) the conversion terms of order p, c_pair =
-// 13/25/50 ns (F/FT/FTS), c_term = 0.8 ns, c_conv = 1 us (measured, N = 1e4). The constants C
+//     n_pair(theta) c_pair + n_conv(theta) (c_conv + terms(p) c_term),
+// n_pair = 1770 (theta/0.5)^-2.5 near pairs and n_conv = 10.8 (theta/0.5)^-2.05 conversions per
+// particle (geometric means of the counts at N = 1e4 ... 3e5, phi = 0.1, tuned leaves), terms(p)
+// the terms of one conversion after
+// the harmonic reduction, c_pair = 8.5/17/50 ns (F/FT/FTS), c_conv = 0.22 us, c_term = 1.37 ns
+// (measured, one thread). Leaf size 0: tuned per configuration among 32, 64, 128 by the same unit
+// costs on the counted pairs and conversions (TreeFarField::set_configuration). The constants C
 // bound the errors measured in tests/test_tree_mobility.cpp (uniform, polydisperse) with a margin;
 // the test checks achieved <= requested from 1e-2 to 1e-12. Throws std::invalid_argument for t
 // outside [1e-14, 0.5] (1e-14 is the floor of the engine's knobs, engine/accuracy.cpp).
@@ -104,6 +107,7 @@ class TreeFarField final : public stokesian::MobilityOperator {
 
   const TreeParameters& parameters() const { return p_; }
   const Octree& tree() const { return tree_; }
+  int leaf_size() const { return leaf_size_; }
   const TreeProductStats& last_stats() const { return stats_; }
 
  private:
@@ -115,6 +119,9 @@ class TreeFarField final : public stokesian::MobilityOperator {
 
   Moments m_;
   double mu_;
+  int leaf_size_ = 32;          // in use (tuned when p_.leaf_size == 0)
+  std::size_t tuned_n_ = 0;     // N of the last tuning
+  long since_tuned_ = 0;        // configurations since
   TreeParameters p_;
   MultiIndexSet moment_set_;  // order p
   MultiIndexSet deriv_set_;   // order p + k (k = 2 for F, FT; 3 for FTS)
