@@ -1,5 +1,6 @@
 #include "engine/model.hpp"
 
+#include "engine/accuracy.hpp"
 #include "engine/core/errors.hpp"
 #include "engine/core/flow.hpp"
 #include "engine/methods.hpp"
@@ -7,6 +8,7 @@
 #include "lubrication/cutoff.hpp"
 #include "lubrication/near_field.hpp"
 #include "trees/neighbor_list.hpp"
+#include "trees/tree_mobility.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -258,8 +260,25 @@ ResolvedModel resolve_model(const Scene& s) {
     } else {
       for (const auto& e : methods.entries())
         if (e.periodic == periodic && e.auto_choice && !chosen) chosen = &e;
+      std::string why;
+      if (!periodic && !s.radii.empty()) {
+        // the octree beyond its measured crossover with the direct sum at the products' tolerance
+        const auto [a_lo, a_hi] = std::minmax_element(s.radii.begin(), s.radii.end());
+        const double ff_tol = derive_knobs(s.hydro.tolerance, m.level, *a_hi / *a_lo).far_field;
+        const long from = trees::tree_auto_from(ff_tol, m.moments);
+        std::ostringstream o;
+        if (from > 0 && long(s.positions.size()) >= from) {
+          chosen = methods.find("tree");
+          o << ", N = " << s.positions.size() << " >= " << from << ", the measured crossover with direct at product tolerance " << ff_tol;
+        } else if (from > 0) {
+          o << ", N = " << s.positions.size() << " < " << from << ", the octree's measured crossover at product tolerance " << ff_tol;
+        } else {
+          o << ", the octree is not an auto choice for FTS";
+        }
+        why = o.str();
+      }
       m.reasons.push_back(std::string("auto far_field: ") + (periodic ? "periodic box" : "open domain") + " -> " +
-                          chosen->name + " (" + chosen->description + ")");
+                          chosen->name + " (" + chosen->description + why + ")");
     }
     m.far_field = chosen->name;
     if (m.level == HydroModel::stokesian) {

@@ -197,7 +197,10 @@ ResourceEstimate estimate_resources(const Scene& s, const ResolvedModel& model) 
                               num(vectors) + " vectors of d N doubles (CG" +
                                   std::string(model.brownian ? ", Lanczos basis" : "") + "), " + dN,
                               model_keys});
-      eval_seconds += 20 * product;
+      // one product, or ~20 CG iterations when velocities are given (fixed particles, FTS strain)
+      const bool constrained = model.moments == Moments::FTS ||
+                               std::any_of(s.fixed.begin(), s.fixed.end(), [](char f) { return f != 0; });
+      eval_seconds += (constrained ? 20 : 1) * product;
     } else if (solver == "dense_sd") {
       e.components.push_back({"SD resistance and factors", 3 * 8.0 * n * n,
                               "3 (d N)^2 doubles: resistance, constrained block, its Cholesky factor; " + dN,

@@ -279,3 +279,45 @@ TEST_CASE("far_field = \"tree\" in a scene: a settling cloud follows the direct 
   // velocities within the tolerance (products and the CG residual at 1e-5) on every step
   CHECK(worst < 1e-5 * travel);
 }
+
+TEST_CASE("a dilute spherical cloud settles at the Hadamard-Rybczynski velocity of a fluid sphere (tree, FT)") {
+  // 20000 spheres uniform in a ball of radius R (phi = 0.05, radii 0.8-1.2, overlaps allowed), each
+  // pushed by its weight F_i = -a_i^3 e_z. For N >> 1 the cloud is a drop of the same viscosity
+  // carrying the total weight W, which falls at U = W / (5 pi mu R) (Hadamard-Rybczynski with
+  // viscosity ratio 1; Nitsche & Batchelor 1997), and every particle inside moves with it on
+  // average. Corrections: each sphere's own Stokes velocity (~1e-3 of U here) and the discreteness
+  // of the surface (~a/R = 1.2 %); bound 3 %. Tree at FT level, tolerance 1e-3 (auto leaf size).
+  const int n = 20000;
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  Cloud c;
+  double volume = 0, weight = 0;
+  for (int i = 0; i < n; ++i) {
+    const double a = 0.8 + 0.4 * u(rng);
+    c.a.push_back(a);
+    volume += 4.18879020478639 * a * a * a;
+    weight += a * a * a;
+  }
+  const double R = std::cbrt(volume / 0.05 / 4.18879020478639);
+  for (int i = 0; i < n; ++i) {
+    Vec3 p;
+    do p = Vec3(2 * u(rng) - 1, 2 * u(rng) - 1, 2 * u(rng) - 1);
+    while (p.norm() > 1);
+    c.x.push_back(R * p);
+  }
+  const Domain open;
+  MobilitySpec spec;
+  spec.moments = Moments::FT;
+  spec.tolerance = 1e-3;
+  TreeFarField tree(spec);
+  tree.set_configuration({c.x, c.a, open});
+  VecX in = VecX::Zero(tree.size());
+  for (int i = 0; i < n; ++i) in[6 * i + 2] = -c.a[std::size_t(i)] * c.a[std::size_t(i)] * c.a[std::size_t(i)];
+  VecX y;
+  tree.apply(in, y);
+  double mean_uz = 0;
+  for (int i = 0; i < n; ++i) mean_uz += y[6 * i + 2] / n;
+  const double hadamard = weight / (5 * 3.14159265358979323846 * R);
+  MESSAGE("mean settling velocity " << -mean_uz << ", W / (5 pi mu R) = " << hadamard << ", ratio " << -mean_uz / hadamard);
+  CHECK(-mean_uz / hadamard == doctest::Approx(1.0).epsilon(0.03));
+}

@@ -213,6 +213,12 @@ double cost_per_particle(const TreeParameters& p, Moments m) {
 
 }  // namespace
 
+long tree_auto_from(double tolerance, Moments m) {
+  if (m == Moments::FTS || !(tolerance > 0)) return 0;
+  if (tolerance >= 1e-3) return 1000;
+  return long(std::ceil(std::pow(10.0, 3.0 + (-3.0 - std::log10(tolerance)) / 3.0)));
+}
+
 double tree_product_seconds(const TreeParameters& p, Moments m, double n) { return n * cost_per_particle(p, m); }
 
 double tree_memory_bytes(const TreeParameters& p, Moments m, double n) {

@@ -70,6 +70,14 @@ struct TreeParameters {
 // outside [1e-14, 0.5] (1e-14 is the floor of the engine's knobs, engine/accuracy.cpp).
 TreeParameters tree_parameters(double tolerance, Moments m);
 
+// `far_field = "auto"` in open domains picks the tree from this N on (0: never), with t the
+// products' tolerance: the measured crossover of one product with the direct sum (uniform cloud,
+// phi = 0.1, radii 0.5-1.5, 2 threads, 2026-11-25; docs/tree.md "Crossover"): equal times near
+// N = 1000 at t = 1e-3, 2000 at 1e-4, 1e4 at 1e-6 (F; FT 5000), so
+//     N = 1000 for t >= 1e-3, 10^(3 + (-3 - log10 t)/3) below (F and FT);
+// FTS (its near pairs use the general kernel) is left to direct summation.
+long tree_auto_from(double tolerance, Moments m);
+
 // Modelled relative error of a product with these parameters (the model above).
 double tree_error_model(const TreeParameters& p, Moments m);
 
