@@ -16,7 +16,7 @@
 //           1e-6: relative error of the mean velocity (the thesis's measure) and of the whole
 //           product against the direct product; written to tree_thesis.json (quick: 11^3).
 // Left out (minutes per product with today's Cartesian expansions): FTS beyond N = 1e5, tolerance
-// 1e-6 beyond 3e4 (F) / 1e4 (FTS). Environment: BENCH_MAX_N (default 1e6; quick 2000), BENCH_THREADS
+// 1e-6 beyond 3e5 (F) / 3e4 (FTS); the tight-tree reference (tolerance / 1000) only for F and FT. Environment: BENCH_MAX_N (default 1e6; quick 2000), BENCH_THREADS
 // (default 2).
 //   bench_tree [--quick] [--out DIR]
 #include "bench/harness.hpp"
@@ -237,16 +237,16 @@ int main(int argc, char** argv) {
       for (double tol : scaling_tols) {
         for (long n : sizes) {
           if (n > max_n) break;
-          // Products of minutes are left out: FTS beyond 1e5, tolerance 1e-6 beyond 3e4 (F) / 1e4 (FTS).
+          // Products of minutes are left out: FTS beyond 1e5, tolerance 1e-6 beyond 3e5 (F) / 3e4 (FTS).
           if (m == Moments::FTS && n > 100000) break;
-          if (tol < 1e-5 && n > (m == Moments::FTS ? 10000 : 30000)) break;
+          if (tol < 1e-5 && n > (m == Moments::FTS ? 30000 : 300000)) break;
           const Cloud c = make_cloud(cloud, n, cloud == 0 ? 0.1 : 0.3, 0.5, 1.5, 53);
           const VecX x = random_vector(n * dof_per_particle(m), 8);
           VecX ref, y;
           int ref_kind = 0;  // 0 direct, 1 tree at tol / 1000
           if (n <= direct_max) {
             mobility_product(c.x, c.a, 1.0, m, x, ref);
-          } else if (n <= 100000 && tol >= 1e-4) {
+          } else if (n <= 100000 && tol >= 1e-4 && m != Moments::FTS) {
             TreeFarField tight(MobilitySpec{m, 1.0, tol * 1e-3});
             tight.set_configuration({c.x, c.a, open});
             tight.apply(x, ref);
@@ -269,7 +269,8 @@ int main(int argc, char** argv) {
             if (ref_kind >= 0) phases["error"] = rel_error(y, ref);
             res.add({{"kind", 0}, {"cloud", double(cloud)}, {"N", double(n)}, {"dof", double(dof_per_particle(m))},
                      {"tol", tol}, {"threads", double(threads)}, {"ref", double(ref_kind)},
-                     {"theta", op.parameters().theta}, {"p", double(op.parameters().order)}},
+                     {"theta", op.parameters().theta}, {"p", double(op.parameters().order)},
+                     {"leaf", double(op.leaf_size())}},
                     phases);
             std::printf("kind 0 %-3s cloud %d tol %.0e N %7ld threads %d: set-up %.3f product %.3f s (up %.3f down %.3f) "
                         "pairs/N %.0f conv/N %.1f error %.2e\n",

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 
@@ -17,6 +18,14 @@ namespace {
 int derivative_order(Moments m) { return m == Moments::FTS ? 3 : 2; }
 
 constexpr double kPi = 3.14159265358979323846;
+
+// The two hot loops (near pairs, conversions) are also compiled for x86-64-v3 (AVX2, FMA) and the
+// version is chosen at run time (GCC function multiversioning); elsewhere one portable version.
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(__SANITIZE_ADDRESS__)
+#define STOKESIAN_TREE_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
+#else
+#define STOKESIAN_TREE_CLONES
+#endif
 // Potentials per expansion (phi_x, phi_y, phi_z, psi), stored interleaved: E[index * kPot + pot].
 constexpr int kPot = 4;
 
@@ -105,6 +114,7 @@ void add_pairs(const std::vector<int>& order, int begin, int end, int i, const s
 //   W_i += k [u^3 F x d - u^3/2 T + 3/2 u^5 (d.T) d];
 // the other pairs (overlapping, nested; rare) go through mobility::pair_scalars. The sum over
 // [begin, end) skips the target's own position qi.
+STOKESIAN_TREE_CLONES
 void add_pairs_sorted(const SortedSources& src, int begin, int end, int qi, double ai, double mu, Moments m,
                       double* yi, long& count) {
   const double xi = src.x[std::size_t(qi)], yc = src.y[std::size_t(qi)], zi = src.z[std::size_t(qi)];
@@ -175,6 +185,41 @@ void add_pairs_sorted(const SortedSources& src, int begin, int end, int qi, doub
     double xj[6];
     for (int c = 0; c < d; ++c) xj[c] = src.in[c][std::size_t(q)];
     mobility::apply_pair(mobility::pair_scalars(ai, A[q], r, mu, m), e, m, xj, yi);
+  }
+}
+
+// L_beta += sum_gamma M_gamma D_(beta + gamma) for the four potentials, the terms of beta being
+// terms[begin[beta] .. begin[beta + 1]) = (gamma, beta + gamma); then psi about the target's centre:
+// + (c_S - c_T)_j phi_j = - R_j phi_j. Compiled for AVX2/FMA too (chosen at run time).
+STOKESIAN_TREE_CLONES
+void convert(const double* M, const double* D, const Vec3& R, const std::array<int, 2>* terms, const int* begin, int nl,
+             double* L) {
+  // the four potentials of an index as one 4-wide vector (GCC/Clang vector extension)
+  typedef double Pot4 __attribute__((vector_size(32)));
+  const double r0 = R[0], r1 = R[1], r2 = R[2];
+  for (int b = 0; b < nl; ++b) {
+    const int k0 = begin[b], k1 = begin[b + 1];
+    if (k0 == k1) continue;
+    Pot4 acc = {0, 0, 0, 0}, acc2 = {0, 0, 0, 0};  // two chains hide the add latency
+    int k = k0;
+    for (; k + 1 < k1; k += 2) {
+      Pot4 m, m2;
+      std::memcpy(&m, M + kPot * terms[k][0], sizeof m);
+      std::memcpy(&m2, M + kPot * terms[k + 1][0], sizeof m2);
+      acc += m * D[terms[k][1]];
+      acc2 += m2 * D[terms[k + 1][1]];
+    }
+    if (k < k1) {
+      Pot4 m;
+      std::memcpy(&m, M + kPot * terms[k][0], sizeof m);
+      acc += m * D[terms[k][1]];
+    }
+    acc += acc2;
+    double* l = L + kPot * b;
+    l[0] += acc[0];
+    l[1] += acc[1];
+    l[2] += acc[2];
+    l[3] += acc[3] - (r0 * acc[0] + r1 * acc[1] + r2 * acc[2]);
   }
 }
 
@@ -548,25 +593,7 @@ void TreeFarField::downward(int t, const VecX& in, VecX& out) const {
     const double* M = moments_.data() + std::size_t(s) * kPot * std::size_t(ng);
     const Vec3 R = T.centre - S.centre;
     inverse_distance_derivatives(R, deriv_set_, D.data());
-    for (int b = 0; b < nl; ++b) {
-      const int k0 = m2l_term_begin_[std::size_t(b)], k1 = m2l_term_begin_[std::size_t(b) + 1];
-      if (k0 == k1) continue;
-      double a0 = 0, a1 = 0, a2 = 0, a3 = 0;
-      for (int k = k0; k < k1; ++k) {
-        const auto& term = m2l_terms_[std::size_t(k)];
-        const double dv = D[std::size_t(term[1])];
-        const double* m = M + kPot * term[0];
-        a0 += m[0] * dv;
-        a1 += m[1] * dv;
-        a2 += m[2] * dv;
-        a3 += m[3] * dv;
-      }
-      double* l = L + kPot * b;
-      l[0] += a0;
-      l[1] += a1;
-      l[2] += a2;
-      l[3] += a3 - (R[0] * a0 + R[1] * a1 + R[2] * a2);
-    }
+    convert(M, D.data(), R, m2l_terms_.data(), m2l_term_begin_.data(), nl, L);
   }
   if (m2l_begin_[std::size_t(t)] < m2l_begin_[std::size_t(t) + 1])
     for (const auto& r : local_rebuild_)
