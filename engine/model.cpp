@@ -272,8 +272,6 @@ ResolvedModel resolve_model(const Scene& s) {
           o << ", N = " << s.positions.size() << " >= " << from << ", the measured crossover with direct at product tolerance " << ff_tol;
         } else if (from > 0) {
           o << ", N = " << s.positions.size() << " < " << from << ", the octree's measured crossover at product tolerance " << ff_tol;
-        } else {
-          o << ", the octree is not an auto choice for FTS";
         }
         why = o.str();
       }

@@ -106,12 +106,13 @@ void add_pairs(const std::vector<int>& order, int begin, int end, int i, const s
   }
 }
 
-// Near pairs of the fmm path, F and FT (the hot loop): sources in tree order as separate
+// Near pairs of the fmm path (the hot loop): sources in tree order as separate
 // coordinate arrays, so that the loop over a source leaf vectorises. Separated pairs (r >= a_i + a_j)
 // use the closed forms of engine/kernels/mobility_pair.cpp (separated_scalars), with d = x_i - x_j,
-// u = 1/r, c = (a_i^2 + a_j^2)/3 and k = 1/(8 pi mu):
+// u = 1/r, c = (a_i^2 + a_j^2)/3 and k = 1/(8 pi mu), for F and FT
 //   U_i += k [u (1 + c u^2) F + u^3 (1 - 3 c u^2) (d.F) d + u^3 T x d],
-//   W_i += k [u^3 F x d - u^3/2 T + 3/2 u^5 (d.T) d];
+//   W_i += k [u^3 F x d - u^3/2 T + 3/2 u^5 (d.T) d],
+// and for FTS every block of mobility::apply_pair written out with its separated scalars;
 // the other pairs (overlapping, nested; rare) go through mobility::pair_scalars. The sum over
 // [begin, end) skips the target's own position qi.
 STOKESIAN_TREE_CLONES
@@ -144,6 +145,71 @@ void add_pairs_sorted(const SortedSources& src, int begin, int end, int qi, doub
     yi[0] += k * u0;
     yi[1] += k * u1;
     yi[2] += k * u2;
+  } else if (m == Moments::FTS) {
+    // The separated scalars of engine/kernels/mobility_pair.cpp (over k) with e = d u and the
+    // stresslet as a symmetric traceless matrix; the strain rate accumulates as a symmetric matrix.
+    const double *T0 = src.in[3].data(), *T1 = src.in[4].data(), *T2 = src.in[5].data();
+    const double *S0 = src.in[6].data(), *S1 = src.in[7].data(), *S2 = src.in[8].data(), *S3 = src.in[9].data(),
+                 *S4 = src.in[10].data();
+    const double r2h = std::sqrt(0.5), r6 = 1.0 / std::sqrt(6.0);
+    double w0 = 0, w1 = 0, w2 = 0, e00 = 0, e11 = 0, e22 = 0, e01 = 0, e02 = 0, e12 = 0;
+#pragma omp simd reduction(+ : u0, u1, u2, w0, w1, w2, e00, e11, e22, e01, e02, e12, close)
+    for (int q = begin; q < end; ++q) {
+      const double dx = xi - X[q], dy = yc - Y[q], dz = zi - Z[q];
+      const double r2 = dx * dx + dy * dy + dz * dz, sum = ai + A[q];
+      const bool sep = r2 >= sum * sum;
+      close += !sep && q != qi;
+      const double u = sep ? 1.0 / std::sqrt(r2) : 0.0, uu = u * u, u3 = u * uu, u4 = uu * uu, u5 = u4 * u;
+      const double aj2 = A[q] * A[q];
+      const double cff = (ai2 + aj2) / 3.0, ctf = ai2 / 5.0 + aj2 / 3.0, cft = ai2 / 3.0 + aj2 / 5.0, ctt = (ai2 + aj2) / 5.0;
+      const double xa = 2.0 * u - 2.0 * cff * u3, ya = u + cff * u3, yb = uu, xc = u3, yc2 = -0.5 * u3;
+      const double xg = -3.0 * uu + 9.0 * ctf * u4, yg = -3.0 * ctf * u4, xgt = 3.0 * uu - 9.0 * cft * u4,
+                   ygt = 3.0 * cft * u4, yh = -1.5 * u3;
+      const double xm = -6.0 * u3 + 36.0 * ctt * u5, ym = 3.0 * u3 - 24.0 * ctt * u5, zm = 6.0 * ctt * u5;
+      const double ex = dx * u, ey = dy * u, ez = dz * u;
+      const double f0 = F0[q], f1 = F1[q], f2 = F2[q], t0 = T0[q], t1 = T1[q], t2 = T2[q];
+      const double sxx = r2h * S0[q] - r6 * S1[q], syy = -r2h * S0[q] - r6 * S1[q], szz = 2.0 * r6 * S1[q];
+      const double sxy = r2h * S2[q], sxz = r2h * S3[q], syz = r2h * S4[q];
+      const double eF = ex * f0 + ey * f1 + ez * f2, eT = ex * t0 + ey * t1 + ez * t2;
+      const double se0 = sxx * ex + sxy * ey + sxz * ez, se1 = sxy * ex + syy * ey + syz * ez,
+                   se2 = sxz * ex + syz * ey + szz * ez;
+      const double eSe = ex * se0 + ey * se1 + ez * se2;
+      const double tx0 = t1 * ez - t2 * ey, tx1 = t2 * ex - t0 * ez, tx2 = t0 * ey - t1 * ex;  // T x e
+      // U = xa eF e + ya (F - eF e) + yb T x e + xgt eSe e + ygt (2 Se - 2 eSe e)
+      const double ue = (xa - ya) * eF + (xgt - 2.0 * ygt) * eSe;
+      u0 += ue * ex + ya * f0 + yb * tx0 + 2.0 * ygt * se0;
+      u1 += ue * ey + ya * f1 + yb * tx1 + 2.0 * ygt * se1;
+      u2 += ue * ez + ya * f2 + yb * tx2 + 2.0 * ygt * se2;
+      // W = yb F x e + xc eT e + yc (T - eT e) + 2 yh e x Se
+      const double we = (xc - yc2) * eT;
+      w0 += yb * (f1 * ez - f2 * ey) + we * ex + yc2 * t0 + 2.0 * yh * (ey * se2 - ez * se1);
+      w1 += yb * (f2 * ex - f0 * ez) + we * ey + yc2 * t1 + 2.0 * yh * (ez * se0 - ex * se2);
+      w2 += yb * (f0 * ey - f1 * ex) + we * ez + yc2 * t2 + 2.0 * yh * (ex * se1 - ey * se0);
+      // E = xg (ee - I/3) eF + yg (e F + F e - 2 eF ee) + yh (e Txe + Txe e) + 1.5 xm (ee - I/3) eSe
+      //   + ym (e Se + Se e - 2 eSe ee) + zm/2 (2 S + I eSe - 2 (e Se + Se e) + ee eSe)
+      const double cee = xg * eF - 2.0 * yg * eF + 1.5 * xm * eSe - 2.0 * ym * eSe + 0.5 * zm * eSe;
+      const double cid = -xg * eF / 3.0 - 0.5 * xm * eSe + 0.5 * zm * eSe;
+      const double cse = ym - zm;  // on e Se + Se e
+      const double g0 = yg * f0 + yh * tx0 + cse * se0, g1 = yg * f1 + yh * tx1 + cse * se1,
+                   g2 = yg * f2 + yh * tx2 + cse * se2;  // symmetric part e g + g e
+      e00 += cee * ex * ex + cid + 2.0 * ex * g0 + zm * sxx;
+      e11 += cee * ey * ey + cid + 2.0 * ey * g1 + zm * syy;
+      e22 += cee * ez * ez + cid + 2.0 * ez * g2 + zm * szz;
+      e01 += cee * ex * ey + ex * g1 + ey * g0 + zm * sxy;
+      e02 += cee * ex * ez + ex * g2 + ez * g0 + zm * sxz;
+      e12 += cee * ey * ez + ey * g2 + ez * g1 + zm * syz;
+    }
+    yi[0] += k * u0;
+    yi[1] += k * u1;
+    yi[2] += k * u2;
+    yi[3] += k * w0;
+    yi[4] += k * w1;
+    yi[5] += k * w2;
+    yi[6] += k * r2h * (e00 - e11);
+    yi[7] += k * r6 * (2.0 * e22 - e00 - e11);
+    yi[8] += k * r2h * 2.0 * e01;
+    yi[9] += k * r2h * 2.0 * e02;
+    yi[10] += k * r2h * 2.0 * e12;
   } else {
     const double *T0 = src.in[3].data(), *T1 = src.in[4].data(), *T2 = src.in[5].data();
     double w0 = 0, w1 = 0, w2 = 0;
@@ -182,7 +248,7 @@ void add_pairs_sorted(const SortedSources& src, int begin, int end, int qi, doub
     const double r = rij.norm();
     if (r >= ai + A[q]) continue;
     const Vec3 e = r > 0 ? Vec3(rij / r) : Vec3::UnitZ();
-    double xj[6];
+    double xj[11];
     for (int c = 0; c < d; ++c) xj[c] = src.in[c][std::size_t(q)];
     mobility::apply_pair(mobility::pair_scalars(ai, A[q], r, mu, m), e, m, xj, yi);
   }
@@ -236,9 +302,9 @@ double conversion_terms(int p, int k) {
 }
 
 // Unit costs on one thread (measured with bench-like uniform clouds, N = 3e4, 2026-11-25; docs/tree.md):
-// a near pair (F: the vectorised closed form; FT likewise; FTS: the general pair kernel) and one
+// a near pair (the vectorised closed forms of F, FT, FTS) and one
 // conversion (0.22 us of derivatives and bookkeeping + 1.37 ns per term).
-double pair_seconds(Moments m) { return m == Moments::F ? 8.5e-9 : (m == Moments::FT ? 17e-9 : 50e-9); }
+double pair_seconds(Moments m) { return m == Moments::F ? 8.5e-9 : (m == Moments::FT ? 17e-9 : 35e-9); }
 double conversion_seconds(int p, Moments m) { return 0.22e-6 + 1.37e-9 * conversion_terms(p, derivative_order(m)); }
 
 }  // namespace
@@ -259,7 +325,8 @@ double cost_per_particle(const TreeParameters& p, Moments m) {
 }  // namespace
 
 long tree_auto_from(double tolerance, Moments m) {
-  if (m == Moments::FTS || !(tolerance > 0)) return 0;
+  (void)m;  // one rule for F, FT and FTS (FTS breaks even earlier, so the rule is conservative there)
+  if (!(tolerance > 0)) return 0;
   if (tolerance >= 1e-3) return 1000;
   return long(std::ceil(std::pow(10.0, 3.0 + (-3.0 - std::log10(tolerance)) / 3.0)));
 }
@@ -559,7 +626,7 @@ void TreeFarField::apply_fmm(const VecX& in, VecX& out) const {
         }
     }
   }
-  if (m_ != Moments::FTS) {
+  {
     const int d = dof_per_particle(m_);
     const std::size_t n = x_.size();
     for (int c = 0; c < d; ++c) sorted_.in[c].resize(n);
@@ -658,10 +725,7 @@ void TreeFarField::downward(int t, const VecX& in, VecX& out) const {
     for (int r = 0; r < d; ++r) yi[r] += scale * y[r];
     for (int k = p2p_begin_[std::size_t(t)]; k < p2p_begin_[std::size_t(t) + 1]; ++k) {
       const OctreeNode& S = tree_.nodes[std::size_t(p2p_source_[std::size_t(k)])];
-      if (m_ == Moments::FTS)
-        add_pairs(tree_.order, S.begin, S.end, i, x_, a_, mu_, m_, in, yi, pairs);
-      else
-        add_pairs_sorted(sorted_, S.begin, S.end, q, ai, mu_, m_, yi, pairs);
+      add_pairs_sorted(sorted_, S.begin, S.end, q, ai, mu_, m_, yi, pairs);
     }
   }
 #pragma omp atomic

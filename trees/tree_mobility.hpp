@@ -62,7 +62,7 @@ struct TreeParameters {
 // n_pair = 1770 (theta/0.5)^-2.5 near pairs and n_conv = 10.8 (theta/0.5)^-2.05 conversions per
 // particle (geometric means of the counts at N = 1e4 ... 3e5, phi = 0.1, tuned leaves), terms(p)
 // the terms of one conversion after
-// the harmonic reduction, c_pair = 8.5/17/50 ns (F/FT/FTS), c_conv = 0.22 us, c_term = 1.37 ns
+// the harmonic reduction, c_pair = 8.5/17/35 ns (F/FT/FTS), c_conv = 0.22 us, c_term = 1.37 ns
 // (measured, one thread). Leaf size 0: tuned per configuration among 32, 64, 128 by the same unit
 // costs on the counted pairs and conversions (TreeFarField::set_configuration). The constants C
 // bound the errors measured in tests/test_tree_mobility.cpp (uniform, polydisperse) with a margin;
@@ -73,9 +73,8 @@ TreeParameters tree_parameters(double tolerance, Moments m);
 // `far_field = "auto"` in open domains picks the tree from this N on (0: never), with t the
 // products' tolerance: the measured crossover of one product with the direct sum (uniform cloud,
 // phi = 0.1, radii 0.5-1.5, 2 threads, 2026-11-25; docs/tree.md "Crossover"): equal times near
-// N = 1000 at t = 1e-3, 2000 at 1e-4, 1e4 at 1e-6 (F; FT 5000), so
-//     N = 1000 for t >= 1e-3, 10^(3 + (-3 - log10 t)/3) below (F and FT);
-// FTS (its near pairs use the general kernel) is left to direct summation.
+// N = 1000 at t = 1e-3, 2000 at 1e-4, 1e4 at 1e-6 (F; FT 5000; FTS 1000, 1000, 2000), so
+//     N = 1000 for t >= 1e-3, 10^(3 + (-3 - log10 t)/3) below (F, FT and FTS).
 long tree_auto_from(double tolerance, Moments m);
 
 // Modelled relative error of a product with these parameters (the model above).
@@ -95,10 +94,10 @@ struct TreeProductStats {
   double downward_seconds = 0; // conversions, shifts, evaluation at the targets and near pairs
 };
 
-// Positions, radii and (F, FT) inputs in tree order, one array per component (the near-pair loop).
+// Positions, radii and inputs (F, T, S) in tree order, one array per component (the near-pair loop).
 struct SortedSources {
   std::vector<double> x, y, z, a;
-  std::vector<double> in[6];
+  std::vector<double> in[11];
 };
 
 class TreeFarField final : public stokesian::MobilityOperator {
