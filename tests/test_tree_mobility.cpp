@@ -110,7 +110,7 @@ TEST_CASE("inverse-distance derivatives: closed forms to third order and finite 
 }
 
 TEST_CASE("octree: every particle once, contiguous node ranges, radii bound the particles") {
-  const Cloud c = random_cloud(3000, 20.0, 0.5, 2.0, 3);
+  const Cloud c = random_cloud(6000, 25.0, 0.5, 2.0, 3);  // above the size of the parallel build
   for (int leaf : {1, 8, 64}) {
     const Octree t = build_octree(c.x, c.a, leaf);
     std::vector<int> seen(c.x.size(), 0);
@@ -136,6 +136,20 @@ TEST_CASE("octree: every particle once, contiguous node ranges, radii bound the 
         CHECK(c.a[i] <= node.a_max);
       }
     }
+  }
+  // The level-parallel build gives the same tree on 1 and 2 threads.
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(1);
+  const Octree serial = build_octree(c.x, c.a, 8);
+  omp_set_num_threads(std::max(2, threads));
+  const Octree parallel = build_octree(c.x, c.a, 8);
+  omp_set_num_threads(threads);
+  CHECK(serial.order == parallel.order);
+  REQUIRE(serial.nodes.size() == parallel.nodes.size());
+  for (std::size_t k = 0; k < serial.nodes.size(); ++k) {
+    CHECK(serial.nodes[k].begin == parallel.nodes[k].begin);
+    CHECK(serial.nodes[k].first_child == parallel.nodes[k].first_child);
+    CHECK(serial.nodes[k].centre == parallel.nodes[k].centre);
   }
   // Coincident centres end in one leaf instead of recursing forever.
   const std::vector<Vec3> same(50, Vec3(1, 2, 3));

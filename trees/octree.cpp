@@ -56,44 +56,68 @@ Octree build_octree(const std::vector<Vec3>& x, const std::vector<double>& a, in
   t.nodes.push_back(OctreeNode{});
   t.nodes[0].begin = 0;
   t.nodes[0].end = n;
-  std::vector<int> scratch;
-  // Breadth first: nodes are split in creation order, children appended as one block.
-  for (std::size_t k = 0; k < t.nodes.size(); ++k) {
-    finish_node(t.nodes[k], t.order, x, a);
-    t.depth = std::max(t.depth, t.nodes[k].level);
-    const Cube cube = cubes[k];
-    if (t.nodes[k].size() <= leaf_size || cube.half < min_half) continue;
-    const int begin = t.nodes[k].begin, end = t.nodes[k].end;
-    std::array<int, 9> count{};
-    auto octant = [&](int i) {
-      const Vec3& p = x[std::size_t(i)];
-      return (p.x() >= cube.mid.x() ? 1 : 0) | (p.y() >= cube.mid.y() ? 2 : 0) | (p.z() >= cube.mid.z() ? 4 : 0);
-    };
-    for (int q = begin; q < end; ++q) ++count[std::size_t(octant(t.order[std::size_t(q)]) + 1)];
-    for (int o = 0; o < 8; ++o) count[std::size_t(o + 1)] += count[std::size_t(o)];
-    scratch.assign(std::size_t(end - begin), 0);
-    std::array<int, 9> fill = count;
-    for (int q = begin; q < end; ++q) {
-      const int i = t.order[std::size_t(q)];
-      scratch[std::size_t(fill[std::size_t(octant(i))]++)] = i;
+  // Level by level (breadth first): the nodes of one level are finished and partitioned in parallel
+  // (each owns its range of `order`), then their children are appended in node order, so the tree
+  // is the same for any thread count.
+  std::size_t level_begin = 0;
+  while (level_begin < t.nodes.size()) {
+    const std::size_t level_end = t.nodes.size();
+    const long count_nodes = long(level_end - level_begin);
+    std::vector<std::array<int, 9>> counts(static_cast<std::size_t>(count_nodes));
+    std::vector<char> split(static_cast<std::size_t>(count_nodes), 0);
+#pragma omp parallel if (count_nodes > 1 && n > 4096)
+    {
+      std::vector<int> scratch;
+#pragma omp for schedule(dynamic, 1)
+      for (long j = 0; j < count_nodes; ++j) {
+        const std::size_t k = level_begin + std::size_t(j);
+        OctreeNode& node = t.nodes[k];
+        finish_node(node, t.order, x, a);
+        const Cube cube = cubes[k];
+        if (node.size() <= leaf_size || cube.half < min_half) continue;
+        split[std::size_t(j)] = 1;
+        const int begin = node.begin, end = node.end;
+        std::array<int, 9>& count = counts[std::size_t(j)];
+        count.fill(0);
+        auto octant = [&](int i) {
+          const Vec3& p = x[std::size_t(i)];
+          return (p.x() >= cube.mid.x() ? 1 : 0) | (p.y() >= cube.mid.y() ? 2 : 0) | (p.z() >= cube.mid.z() ? 4 : 0);
+        };
+        for (int q = begin; q < end; ++q) ++count[std::size_t(octant(t.order[std::size_t(q)]) + 1)];
+        for (int o = 0; o < 8; ++o) count[std::size_t(o + 1)] += count[std::size_t(o)];
+        scratch.assign(std::size_t(end - begin), 0);
+        std::array<int, 9> fill = count;
+        for (int q = begin; q < end; ++q) {
+          const int i = t.order[std::size_t(q)];
+          scratch[std::size_t(fill[std::size_t(octant(i))]++)] = i;
+        }
+        std::copy(scratch.begin(), scratch.end(), t.order.begin() + begin);
+      }
     }
-    std::copy(scratch.begin(), scratch.end(), t.order.begin() + begin);
-    const int first = int(t.nodes.size());
-    int children = 0;
-    for (int o = 0; o < 8; ++o) {
-      if (count[std::size_t(o + 1)] == count[std::size_t(o)]) continue;
-      OctreeNode child;
-      child.begin = begin + count[std::size_t(o)];
-      child.end = begin + count[std::size_t(o + 1)];
-      child.level = t.nodes[k].level + 1;
-      const double h = 0.5 * cube.half;
-      const Vec3 mid = cube.mid + Vec3((o & 1) ? h : -h, (o & 2) ? h : -h, (o & 4) ? h : -h);
-      t.nodes.push_back(child);
-      cubes.push_back({mid, h});
-      ++children;
+    for (long j = 0; j < count_nodes; ++j) {
+      const std::size_t k = level_begin + std::size_t(j);
+      t.depth = std::max(t.depth, t.nodes[k].level);
+      if (!split[std::size_t(j)]) continue;
+      const std::array<int, 9>& count = counts[std::size_t(j)];
+      const Cube cube = cubes[k];
+      const int first = int(t.nodes.size());
+      int children = 0;
+      for (int o = 0; o < 8; ++o) {
+        if (count[std::size_t(o + 1)] == count[std::size_t(o)]) continue;
+        OctreeNode child;
+        child.begin = t.nodes[k].begin + count[std::size_t(o)];
+        child.end = t.nodes[k].begin + count[std::size_t(o + 1)];
+        child.level = t.nodes[k].level + 1;
+        const double h = 0.5 * cube.half;
+        const Vec3 mid = cube.mid + Vec3((o & 1) ? h : -h, (o & 2) ? h : -h, (o & 4) ? h : -h);
+        t.nodes.push_back(child);
+        cubes.push_back({mid, h});
+        ++children;
+      }
+      t.nodes[k].first_child = first;
+      t.nodes[k].child_count = children;
     }
-    t.nodes[k].first_child = first;
-    t.nodes[k].child_count = children;
+    level_begin = level_end;
   }
   return t;
 }

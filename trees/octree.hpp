@@ -8,7 +8,8 @@
 // centres). Particles are permuted (`order`) so that every node owns one contiguous range, and the
 // children of a node are stored contiguously. Each node records its expansion centre c (the
 // midpoint of its particles' bounding box), the radius rho = max |x_i - c| over its particles and
-// the largest sphere radius in it, the quantities of the multipole acceptance test.
+// the largest sphere radius in it, the quantities of the multipole acceptance test. Built level by
+// level, the nodes of a level in parallel (OpenMP); the result does not depend on the thread count.
 #include "engine/core/types.hpp"
 
 #include <vector>
