@@ -126,6 +126,7 @@ void add_pairs_sorted(const SortedSources& src, int begin, int end, int qi, doub
   const double* A = src.a.data();
   const double *F0 = src.in[0].data(), *F1 = src.in[1].data(), *F2 = src.in[2].data();
   double u0 = 0, u1 = 0, u2 = 0;
+  double sum_rest[8] = {0, 0, 0, 0, 0, 0, 0, 0};  // Omega and E (FT, FTS), before the factor k
   int close = 0;
   if (m == Moments::F) {
 #pragma omp simd reduction(+ : u0, u1, u2) reduction(+ : close)
@@ -142,9 +143,6 @@ void add_pairs_sorted(const SortedSources& src, int begin, int end, int qi, doub
       u1 += f * F1[q] + b * dy;
       u2 += f * F2[q] + b * dz;
     }
-    yi[0] += k * u0;
-    yi[1] += k * u1;
-    yi[2] += k * u2;
   } else if (m == Moments::FTS) {
     // The separated scalars of engine/kernels/mobility_pair.cpp (over k) with e = d u and the
     // stresslet as a symmetric traceless matrix; the strain rate accumulates as a symmetric matrix.
@@ -199,17 +197,9 @@ void add_pairs_sorted(const SortedSources& src, int begin, int end, int qi, doub
       e02 += cee * ex * ez + ex * g2 + ez * g0 + zm * sxz;
       e12 += cee * ey * ez + ey * g2 + ez * g1 + zm * syz;
     }
-    yi[0] += k * u0;
-    yi[1] += k * u1;
-    yi[2] += k * u2;
-    yi[3] += k * w0;
-    yi[4] += k * w1;
-    yi[5] += k * w2;
-    yi[6] += k * r2h * (e00 - e11);
-    yi[7] += k * r6 * (2.0 * e22 - e00 - e11);
-    yi[8] += k * r2h * 2.0 * e01;
-    yi[9] += k * r2h * 2.0 * e02;
-    yi[10] += k * r2h * 2.0 * e12;
+    const double rest[8] = {w0, w1, w2, r2h * (e00 - e11), r6 * (2.0 * e22 - e00 - e11),
+                            r2h * 2.0 * e01, r2h * 2.0 * e02, r2h * 2.0 * e12};  // E as to_vec5
+    std::copy(rest, rest + 8, sum_rest);
   } else {
     const double *T0 = src.in[3].data(), *T1 = src.in[4].data(), *T2 = src.in[5].data();
     double w0 = 0, w1 = 0, w2 = 0;
@@ -232,16 +222,18 @@ void add_pairs_sorted(const SortedSources& src, int begin, int end, int qi, doub
       w1 += u3 * (F2[q] * dx - F0[q] * dz) - 0.5 * u3 * T1[q] + t * dy;
       w2 += u3 * (F0[q] * dy - F1[q] * dx) - 0.5 * u3 * T2[q] + t * dz;
     }
-    yi[0] += k * u0;
-    yi[1] += k * u1;
-    yi[2] += k * u2;
-    yi[3] += k * w0;
-    yi[4] += k * w1;
-    yi[5] += k * w2;
+    sum_rest[0] = w0;
+    sum_rest[1] = w1;
+    sum_rest[2] = w2;
   }
+  // y_i += k [U, Omega, E] (the first three entries from u0..u2, the rest from sum_rest)
+  const int dof = dof_per_particle(m);
+  yi[0] += k * u0;
+  yi[1] += k * u1;
+  yi[2] += k * u2;
+  for (int r = 3; r < dof; ++r) yi[r] += k * sum_rest[r - 3];
   count += end - begin - (qi >= begin && qi < end ? 1 : 0);
   if (!close) return;
-  const int d = dof_per_particle(m);
   for (int q = begin; q < end; ++q) {
     if (q == qi) continue;
     const Vec3 rij(xi - X[q], yc - Y[q], zi - Z[q]);
@@ -249,7 +241,7 @@ void add_pairs_sorted(const SortedSources& src, int begin, int end, int qi, doub
     if (r >= ai + A[q]) continue;
     const Vec3 e = r > 0 ? Vec3(rij / r) : Vec3::UnitZ();
     double xj[11];
-    for (int c = 0; c < d; ++c) xj[c] = src.in[c][std::size_t(q)];
+    for (int c = 0; c < dof; ++c) xj[c] = src.in[c][std::size_t(q)];
     mobility::apply_pair(mobility::pair_scalars(ai, A[q], r, mu, m), e, m, xj, yi);
   }
 }
