@@ -3,7 +3,8 @@
 //   kind 0  scaling: time per product y = M x against N, F and FTS, knobs from tolerances 1e-3, 1e-4,
 //           1e-6, a uniform cube (phi = 0.1) and a dense spherical cloud (phi = 0.3), radii 0.5-1.5,
 //           1 and 2 threads; phases set-up (tree, lists), upward, downward; achieved error against
-//           the direct product (N <= 20000) or against the tree at tolerance / 1000 (labelled ref 1)
+//           the direct product (N <= 20000, ref 0) or, beyond, against the direct rows of 300
+//           random particles (ref 2)
 //   kind 1  the direct O(N^2) product, measured to N = 20000 (1 and 2 threads)
 //   kind 2  error against theta for p = 0 ... 10 (FMM) and Barnes-Hut p = 0, 3000 spheres: uniform,
 //           clustered (8 dense balls), polydisperse (radius ratio 10), F and FTS
@@ -15,12 +16,12 @@
 //           diameter with the distance) for theta_thesis = 1, 0.1, and the FMM at tolerances 1e-3,
 //           1e-6: relative error of the mean velocity (the thesis's measure) and of the whole
 //           product against the direct product; written to tree_thesis.json (quick: 11^3).
-// Left out (minutes per product with today's Cartesian expansions): FTS beyond N = 1e5, tolerance
-// 1e-6 beyond 3e5 (F) / 3e4 (FTS); the tight-tree reference (tolerance / 1000) only for F and FT. Environment: BENCH_MAX_N (default 1e6; quick 2000), BENCH_THREADS
-// (default 2).
+// Left out (minutes per product): FTS beyond N = 3e5, and beyond 1e5 at tolerance 1e-6.
+// Environment: BENCH_MAX_N (default 1e6; quick 2000), BENCH_THREADS (default 2).
 //   bench_tree [--quick] [--out DIR]
 #include "bench/harness.hpp"
 #include "engine/kernels/far_field.hpp"
+#include "engine/kernels/mobility_pair.hpp"
 #include "trees/tree_mobility.hpp"
 
 #include <omp.h>
@@ -37,6 +38,8 @@ using trees::TreeFarField;
 using trees::TreeParameters;
 
 namespace {
+
+constexpr int kSampledRows = 300;  // rows of the sampled direct reference
 
 struct Cloud {
   std::vector<Vec3> x;
@@ -86,6 +89,40 @@ VecX random_vector(long size, unsigned seed) {
 }
 
 double rel_error(const VecX& y, const VecX& ref) { return (y - ref).norm() / ref.norm(); }
+
+// The direct product's rows at `count` random particles (the O(N) sum of the exact pair kernel of
+// engine/kernels for each), and the relative 2-norm error of y over those rows: the reference
+// where the whole direct product is too slow.
+double sampled_error(const Cloud& c, Moments m, const VecX& x, const VecX& y, int count, unsigned seed, int threads) {
+  const long n = long(c.x.size());
+  const int d = dof_per_particle(m);
+  std::mt19937_64 rng(seed);
+  std::vector<long> rows(static_cast<std::size_t>(count));
+  for (auto& i : rows) i = long(rng() % std::uint64_t(n));
+  std::vector<double> ref(static_cast<std::size_t>(count * d), 0.0);
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
+  for (int s = 0; s < count; ++s) {
+    const long i = rows[std::size_t(s)];
+    double* yi = ref.data() + std::size_t(s * d);
+    mobility::apply_self(c.a[std::size_t(i)], 1.0, m, x.data() + i * d, yi);
+    for (long j = 0; j < n; ++j) {
+      if (j == i) continue;
+      const Vec3 rij = c.x[std::size_t(i)] - c.x[std::size_t(j)];
+      const double r = rij.norm();
+      const Vec3 e = r > 0 ? Vec3(rij / r) : Vec3::UnitZ();
+      mobility::apply_pair(mobility::pair_scalars(c.a[std::size_t(i)], c.a[std::size_t(j)], r, 1.0, m), e, m,
+                           x.data() + j * d, yi);
+    }
+  }
+  double num = 0, den = 0;
+  for (int s = 0; s < count; ++s)
+    for (int r = 0; r < d; ++r) {
+      const double diff = y[rows[std::size_t(s)] * d + r] - ref[std::size_t(s * d + r)];
+      num += diff * diff;
+      den += ref[std::size_t(s * d + r)] * ref[std::size_t(s * d + r)];
+    }
+  return std::sqrt(num / den);
+}
 
 }  // namespace
 
@@ -237,23 +274,17 @@ int main(int argc, char** argv) {
       for (double tol : scaling_tols) {
         for (long n : sizes) {
           if (n > max_n) break;
-          // Products of minutes are left out: FTS beyond 1e5, tolerance 1e-6 beyond 3e5 (F) / 3e4 (FTS).
-          if (m == Moments::FTS && n > 100000) break;
-          if (tol < 1e-5 && n > (m == Moments::FTS ? 30000 : 300000)) break;
+          // Products of minutes are left out: FTS beyond 3e5, and beyond 1e5 at tolerance 1e-6.
+          if (m == Moments::FTS && n > (tol < 1e-5 ? 100000 : 300000)) break;
           const Cloud c = make_cloud(cloud, n, cloud == 0 ? 0.1 : 0.3, 0.5, 1.5, 53);
           const VecX x = random_vector(n * dof_per_particle(m), 8);
           VecX ref, y;
-          int ref_kind = 0;  // 0 direct, 1 tree at tol / 1000
-          if (n <= direct_max) {
+          int ref_kind = 0;  // 0 direct, 2 direct at sampled rows
+          if (n <= direct_max)
             mobility_product(c.x, c.a, 1.0, m, x, ref);
-          } else if (n <= 100000 && tol >= 1e-4 && m != Moments::FTS) {
-            TreeFarField tight(MobilitySpec{m, 1.0, tol * 1e-3});
-            tight.set_configuration({c.x, c.a, open});
-            tight.apply(x, ref);
-            ref_kind = 1;
-          } else {
-            ref_kind = -1;  // no reference
-          }
+          else
+            ref_kind = 2;
+          double sampled = -1;
           for (int threads = 1; threads <= max_threads; ++threads) {
             omp_set_num_threads(threads);
             TreeFarField op(MobilitySpec{m, 1.0, tol});
@@ -266,7 +297,12 @@ int main(int argc, char** argv) {
                                                  {"downward", st.downward_seconds},
                                                  {"pairs", double(st.pair_interactions)},
                                                  {"conversions", double(st.m2l)}};
-            if (ref_kind >= 0) phases["error"] = rel_error(y, ref);
+            if (ref_kind == 0)
+              phases["error"] = rel_error(y, ref);
+            else {
+              if (sampled < 0) sampled = sampled_error(c, m, x, y, kSampledRows, 77, max_threads);  // once per product
+              phases["error"] = sampled;
+            }
             res.add({{"kind", 0}, {"cloud", double(cloud)}, {"N", double(n)}, {"dof", double(dof_per_particle(m))},
                      {"tol", tol}, {"threads", double(threads)}, {"ref", double(ref_kind)},
                      {"theta", op.parameters().theta}, {"p", double(op.parameters().order)},
@@ -276,7 +312,7 @@ int main(int argc, char** argv) {
                         "pairs/N %.0f conv/N %.1f error %.2e\n",
                         to_string(m), cloud, tol, n, threads, t_setup, t, st.upward_seconds, st.downward_seconds,
                         double(st.pair_interactions) / n, double(st.m2l) / n,
-                        ref_kind >= 0 ? phases["error"] : -1.0);
+                        phases["error"]);
             std::fflush(stdout);
           }
           omp_set_num_threads(max_threads);

@@ -98,6 +98,12 @@ for dof, mk in ((3, "o"), (6, "^"), (11, "s")):
         if rs:
             ax.loglog([r["params"]["tol"] for r in rs], [r["phases"]["error"] / r["params"]["tol"] for r in rs],
                       mk + "-", color=col, label=f"{NAME[dof]} {'cube' if cloud == 0 else 'ball'}", ms=4)
+# the scaling rows (N = 1e3 ... 1e6; direct reference to 2e4, 300 sampled direct rows beyond), 2 threads
+sc = [r for r in sel(kind=0, threads=2) if "error" in r["phases"]]
+if sc:
+    ax.scatter([r["params"]["tol"] * (1.0 + 0.15 * np.log10(r["params"]["N"] / 1e3)) for r in sc],
+               [r["phases"]["error"] / r["params"]["tol"] for r in sc], s=10, facecolors="none", edgecolors="gray",
+               label="scaling rows, N = 1e3 ... 1e6 (offset right with N)")
 ax.axhline(1.0, color="k", lw=1)
 ax.set_xlabel("requested tolerance")
 ax.set_ylabel("achieved / requested")
@@ -154,7 +160,7 @@ print("\n| moments | cloud | tol | N | theta | p | product [s] | set-up [s] | pa
 print("|---|---|---|---|---|---|---|---|---|---|---|---|")
 for name, cloud, tol, r in table:
     P, ph = r["params"], r["phases"]
-    ref = {0: "direct", 1: "tree at tol/1000", -1: "none"}[int(P["ref"])]
+    ref = {0: "direct", 1: "tree at tol/1000", 2: "direct, 300 rows", -1: "none"}[int(P["ref"])]
     err = f"{ph['error']:.2e}" if "error" in ph else "–"
     print(f"| {name} | {cloud} | {tol:.0e} | {int(P['N'])} | {P['theta']:.2f} | {int(P['p'])} | {ph['product']:.3g} | "
           f"{ph['setup']:.3g} | {ph['pairs'] / P['N']:.0f} | {ph['conversions'] / P['N']:.1f} | {err} | {ref} |")

@@ -43,6 +43,14 @@ MultiIndexSet::MultiIndexSet(int order) : n_(order) {
       }
     }
   }
+  power_step_.resize(alpha_.size());
+  for (std::size_t k = 1; k < alpha_.size(); ++k) {
+    const auto& al = alpha_[k];
+    const int c = al[0] > 0 ? 0 : (al[1] > 0 ? 1 : 2);
+    std::array<int, 3> b = al;
+    --b[std::size_t(c)];
+    power_step_[k] = {index(b[0], b[1], b[2]), c, 1.0 / al[std::size_t(c)]};
+  }
   plus_.resize(3 * alpha_.size());
   for (std::size_t k = 0; k < alpha_.size(); ++k)
     for (int d = 0; d < 3; ++d) {
@@ -68,13 +76,11 @@ void inverse_distance_derivatives(const Vec3& R, const MultiIndexSet& set, doubl
 }
 
 void scaled_powers(const Vec3& s, const MultiIndexSet& set, double* w) {
+  const double ms[3] = {-s[0], -s[1], -s[2]};
   w[0] = 1;
   for (int k = 1; k < set.size(); ++k) {
-    const auto& al = set[k];
-    const int c = al[0] > 0 ? 0 : (al[1] > 0 ? 1 : 2);
-    std::array<int, 3> b = al;
-    --b[std::size_t(c)];
-    w[k] = w[set.index(b[0], b[1], b[2])] * (-s[c]) / al[std::size_t(c)];
+    const MultiIndexSet::PowerStep& st = set.power_step(k);
+    w[k] = w[st.prev] * ms[st.c] * st.inv;
   }
 }
 

@@ -44,6 +44,13 @@ class MultiIndexSet {
     double first_weight[3] = {0, 0, 0}, second_weight[3] = {0, 0, 0};
   };
   const Recurrence& recurrence(int k) const { return recurrence_[std::size_t(k)]; }
+  // alpha_k = alpha_prev + e_c with c the first non-zero component (scaled_powers: w_k = w_prev
+  // (-s_c) / alpha_c); k >= 1.
+  struct PowerStep {
+    int prev = 0, c = 0;
+    double inv = 0;  // 1 / (alpha_k)_c
+  };
+  const PowerStep& power_step(int k) const { return power_step_[std::size_t(k)]; }
 
  private:
   int n_;
@@ -53,6 +60,7 @@ class MultiIndexSet {
   std::vector<int> lookup_;
   std::vector<int> plus_;
   std::vector<Recurrence> recurrence_;
+  std::vector<PowerStep> power_step_;
 };
 
 // d[k] = d^{alpha_k} (1/|R|) for every alpha_k of `set` (d has set.size() entries); R != 0.

@@ -2,11 +2,13 @@
 
 #include "engine/core/sym_traceless.hpp"
 #include "engine/kernels/mobility_pair.hpp"
+#include "trees/near_pairs.hpp"
 
 #include <omp.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <stdexcept>
 #include <string>
@@ -19,13 +21,6 @@ int derivative_order(Moments m) { return m == Moments::FTS ? 3 : 2; }
 
 constexpr double kPi = 3.14159265358979323846;
 
-// The two hot loops (near pairs, conversions) are also compiled for x86-64-v3 (AVX2, FMA) and the
-// version is chosen at run time (GCC function multiversioning); elsewhere one portable version.
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(__SANITIZE_ADDRESS__)
-#define STOKESIAN_TREE_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
-#else
-#define STOKESIAN_TREE_CLONES
-#endif
 // Potentials per expansion (phi_x, phi_y, phi_z, psi), stored interleaved: E[index * kPot + pot].
 constexpr int kPot = 4;
 
@@ -106,146 +101,6 @@ void add_pairs(const std::vector<int>& order, int begin, int end, int i, const s
   }
 }
 
-// Near pairs of the fmm path (the hot loop): sources in tree order as separate
-// coordinate arrays, so that the loop over a source leaf vectorises. Separated pairs (r >= a_i + a_j)
-// use the closed forms of engine/kernels/mobility_pair.cpp (separated_scalars), with d = x_i - x_j,
-// u = 1/r, c = (a_i^2 + a_j^2)/3 and k = 1/(8 pi mu), for F and FT
-//   U_i += k [u (1 + c u^2) F + u^3 (1 - 3 c u^2) (d.F) d + u^3 T x d],
-//   W_i += k [u^3 F x d - u^3/2 T + 3/2 u^5 (d.T) d],
-// and for FTS every block of mobility::apply_pair written out with its separated scalars;
-// the other pairs (overlapping, nested; rare) go through mobility::pair_scalars. The sum over
-// [begin, end) skips the target's own position qi.
-STOKESIAN_TREE_CLONES
-void add_pairs_sorted(const SortedSources& src, int begin, int end, int qi, double ai, double mu, Moments m,
-                      double* yi, long& count) {
-  const double xi = src.x[std::size_t(qi)], yc = src.y[std::size_t(qi)], zi = src.z[std::size_t(qi)];
-  const double ai2 = ai * ai, k = 1.0 / (8.0 * kPi * mu);
-  const double* X = src.x.data();
-  const double* Y = src.y.data();
-  const double* Z = src.z.data();
-  const double* A = src.a.data();
-  const double *F0 = src.in[0].data(), *F1 = src.in[1].data(), *F2 = src.in[2].data();
-  double u0 = 0, u1 = 0, u2 = 0;
-  double sum_rest[8] = {0, 0, 0, 0, 0, 0, 0, 0};  // Omega and E (FT, FTS), before the factor k
-  int close = 0;
-  if (m == Moments::F) {
-#pragma omp simd reduction(+ : u0, u1, u2) reduction(+ : close)
-    for (int q = begin; q < end; ++q) {
-      const double dx = xi - X[q], dy = yc - Y[q], dz = zi - Z[q];
-      const double r2 = dx * dx + dy * dy + dz * dz, sum = ai + A[q];
-      const bool sep = r2 >= sum * sum;
-      close += !sep && q != qi;
-      const double u = sep ? 1.0 / std::sqrt(r2) : 0.0, uu = u * u;
-      const double c = (ai2 + A[q] * A[q]) * (1.0 / 3.0) * uu;
-      const double b = u * uu * (1.0 - 3.0 * c) * (dx * F0[q] + dy * F1[q] + dz * F2[q]);
-      const double f = u * (1.0 + c);
-      u0 += f * F0[q] + b * dx;
-      u1 += f * F1[q] + b * dy;
-      u2 += f * F2[q] + b * dz;
-    }
-  } else if (m == Moments::FTS) {
-    // The separated scalars of engine/kernels/mobility_pair.cpp (over k) with e = d u and the
-    // stresslet as a symmetric traceless matrix; the strain rate accumulates as a symmetric matrix.
-    const double *T0 = src.in[3].data(), *T1 = src.in[4].data(), *T2 = src.in[5].data();
-    const double *S0 = src.in[6].data(), *S1 = src.in[7].data(), *S2 = src.in[8].data(), *S3 = src.in[9].data(),
-                 *S4 = src.in[10].data();
-    const double r2h = std::sqrt(0.5), r6 = 1.0 / std::sqrt(6.0);
-    double w0 = 0, w1 = 0, w2 = 0, e00 = 0, e11 = 0, e22 = 0, e01 = 0, e02 = 0, e12 = 0;
-#pragma omp simd reduction(+ : u0, u1, u2, w0, w1, w2, e00, e11, e22, e01, e02, e12, close)
-    for (int q = begin; q < end; ++q) {
-      const double dx = xi - X[q], dy = yc - Y[q], dz = zi - Z[q];
-      const double r2 = dx * dx + dy * dy + dz * dz, sum = ai + A[q];
-      const bool sep = r2 >= sum * sum;
-      close += !sep && q != qi;
-      const double u = sep ? 1.0 / std::sqrt(r2) : 0.0, uu = u * u, u3 = u * uu, u4 = uu * uu, u5 = u4 * u;
-      const double aj2 = A[q] * A[q];
-      const double cff = (ai2 + aj2) / 3.0, ctf = ai2 / 5.0 + aj2 / 3.0, cft = ai2 / 3.0 + aj2 / 5.0, ctt = (ai2 + aj2) / 5.0;
-      const double xa = 2.0 * u - 2.0 * cff * u3, ya = u + cff * u3, yb = uu, xc = u3, yc2 = -0.5 * u3;
-      const double xg = -3.0 * uu + 9.0 * ctf * u4, yg = -3.0 * ctf * u4, xgt = 3.0 * uu - 9.0 * cft * u4,
-                   ygt = 3.0 * cft * u4, yh = -1.5 * u3;
-      const double xm = -6.0 * u3 + 36.0 * ctt * u5, ym = 3.0 * u3 - 24.0 * ctt * u5, zm = 6.0 * ctt * u5;
-      const double ex = dx * u, ey = dy * u, ez = dz * u;
-      const double f0 = F0[q], f1 = F1[q], f2 = F2[q], t0 = T0[q], t1 = T1[q], t2 = T2[q];
-      const double sxx = r2h * S0[q] - r6 * S1[q], syy = -r2h * S0[q] - r6 * S1[q], szz = 2.0 * r6 * S1[q];
-      const double sxy = r2h * S2[q], sxz = r2h * S3[q], syz = r2h * S4[q];
-      const double eF = ex * f0 + ey * f1 + ez * f2, eT = ex * t0 + ey * t1 + ez * t2;
-      const double se0 = sxx * ex + sxy * ey + sxz * ez, se1 = sxy * ex + syy * ey + syz * ez,
-                   se2 = sxz * ex + syz * ey + szz * ez;
-      const double eSe = ex * se0 + ey * se1 + ez * se2;
-      const double tx0 = t1 * ez - t2 * ey, tx1 = t2 * ex - t0 * ez, tx2 = t0 * ey - t1 * ex;  // T x e
-      // U = xa eF e + ya (F - eF e) + yb T x e + xgt eSe e + ygt (2 Se - 2 eSe e)
-      const double ue = (xa - ya) * eF + (xgt - 2.0 * ygt) * eSe;
-      u0 += ue * ex + ya * f0 + yb * tx0 + 2.0 * ygt * se0;
-      u1 += ue * ey + ya * f1 + yb * tx1 + 2.0 * ygt * se1;
-      u2 += ue * ez + ya * f2 + yb * tx2 + 2.0 * ygt * se2;
-      // W = yb F x e + xc eT e + yc (T - eT e) + 2 yh e x Se
-      const double we = (xc - yc2) * eT;
-      w0 += yb * (f1 * ez - f2 * ey) + we * ex + yc2 * t0 + 2.0 * yh * (ey * se2 - ez * se1);
-      w1 += yb * (f2 * ex - f0 * ez) + we * ey + yc2 * t1 + 2.0 * yh * (ez * se0 - ex * se2);
-      w2 += yb * (f0 * ey - f1 * ex) + we * ez + yc2 * t2 + 2.0 * yh * (ex * se1 - ey * se0);
-      // E = xg (ee - I/3) eF + yg (e F + F e - 2 eF ee) + yh (e Txe + Txe e) + 1.5 xm (ee - I/3) eSe
-      //   + ym (e Se + Se e - 2 eSe ee) + zm/2 (2 S + I eSe - 2 (e Se + Se e) + ee eSe)
-      const double cee = xg * eF - 2.0 * yg * eF + 1.5 * xm * eSe - 2.0 * ym * eSe + 0.5 * zm * eSe;
-      const double cid = -xg * eF / 3.0 - 0.5 * xm * eSe + 0.5 * zm * eSe;
-      const double cse = ym - zm;  // on e Se + Se e
-      const double g0 = yg * f0 + yh * tx0 + cse * se0, g1 = yg * f1 + yh * tx1 + cse * se1,
-                   g2 = yg * f2 + yh * tx2 + cse * se2;  // symmetric part e g + g e
-      e00 += cee * ex * ex + cid + 2.0 * ex * g0 + zm * sxx;
-      e11 += cee * ey * ey + cid + 2.0 * ey * g1 + zm * syy;
-      e22 += cee * ez * ez + cid + 2.0 * ez * g2 + zm * szz;
-      e01 += cee * ex * ey + ex * g1 + ey * g0 + zm * sxy;
-      e02 += cee * ex * ez + ex * g2 + ez * g0 + zm * sxz;
-      e12 += cee * ey * ez + ey * g2 + ez * g1 + zm * syz;
-    }
-    const double rest[8] = {w0, w1, w2, r2h * (e00 - e11), r6 * (2.0 * e22 - e00 - e11),
-                            r2h * 2.0 * e01, r2h * 2.0 * e02, r2h * 2.0 * e12};  // E as to_vec5
-    std::copy(rest, rest + 8, sum_rest);
-  } else {
-    const double *T0 = src.in[3].data(), *T1 = src.in[4].data(), *T2 = src.in[5].data();
-    double w0 = 0, w1 = 0, w2 = 0;
-#pragma omp simd reduction(+ : u0, u1, u2, w0, w1, w2) reduction(+ : close)
-    for (int q = begin; q < end; ++q) {
-      const double dx = xi - X[q], dy = yc - Y[q], dz = zi - Z[q];
-      const double r2 = dx * dx + dy * dy + dz * dz, sum = ai + A[q];
-      const bool sep = r2 >= sum * sum;
-      close += !sep && q != qi;
-      const double u = sep ? 1.0 / std::sqrt(r2) : 0.0, uu = u * u, u3 = u * uu;
-      const double c = (ai2 + A[q] * A[q]) * (1.0 / 3.0) * uu;
-      const double b = u3 * (1.0 - 3.0 * c) * (dx * F0[q] + dy * F1[q] + dz * F2[q]);
-      const double f = u * (1.0 + c);
-      const double t = 1.5 * u3 * uu * (dx * T0[q] + dy * T1[q] + dz * T2[q]);
-      // T x d and F x d
-      u0 += f * F0[q] + b * dx + u3 * (T1[q] * dz - T2[q] * dy);
-      u1 += f * F1[q] + b * dy + u3 * (T2[q] * dx - T0[q] * dz);
-      u2 += f * F2[q] + b * dz + u3 * (T0[q] * dy - T1[q] * dx);
-      w0 += u3 * (F1[q] * dz - F2[q] * dy) - 0.5 * u3 * T0[q] + t * dx;
-      w1 += u3 * (F2[q] * dx - F0[q] * dz) - 0.5 * u3 * T1[q] + t * dy;
-      w2 += u3 * (F0[q] * dy - F1[q] * dx) - 0.5 * u3 * T2[q] + t * dz;
-    }
-    sum_rest[0] = w0;
-    sum_rest[1] = w1;
-    sum_rest[2] = w2;
-  }
-  // y_i += k [U, Omega, E] (the first three entries from u0..u2, the rest from sum_rest)
-  const int dof = dof_per_particle(m);
-  yi[0] += k * u0;
-  yi[1] += k * u1;
-  yi[2] += k * u2;
-  for (int r = 3; r < dof; ++r) yi[r] += k * sum_rest[r - 3];
-  count += end - begin - (qi >= begin && qi < end ? 1 : 0);
-  if (!close) return;
-  for (int q = begin; q < end; ++q) {
-    if (q == qi) continue;
-    const Vec3 rij(xi - X[q], yc - Y[q], zi - Z[q]);
-    const double r = rij.norm();
-    if (r >= ai + A[q]) continue;
-    const Vec3 e = r > 0 ? Vec3(rij / r) : Vec3::UnitZ();
-    double xj[11];
-    for (int c = 0; c < dof; ++c) xj[c] = src.in[c][std::size_t(q)];
-    mobility::apply_pair(mobility::pair_scalars(ai, A[q], r, mu, m), e, m, xj, yi);
-  }
-}
-
 // L_beta += sum_gamma M_gamma D_(beta + gamma) for the four potentials, the terms of beta being
 // terms[begin[beta] .. begin[beta + 1]) = (gamma, beta + gamma); then psi about the target's centre:
 // + (c_S - c_T)_j phi_j = - R_j phi_j. Compiled for AVX2/FMA too (chosen at run time).
@@ -281,6 +136,98 @@ void convert(const double* M, const double* D, const Vec3& R, const std::array<i
   }
 }
 
+// out = sum over terms[k0 .. k1) of L_(term[2]) w_(term[1]), four potentials at once (the shift of
+// a local expansion to a child's centre or a target: L'_beta = sum_delta L_(beta + delta) w_delta).
+STOKESIAN_TREE_CLONES
+void shift_sum(const double* L, const double* w, const std::array<int, 3>* terms, int k0, int k1, double* out) {
+  typedef double Pot4 __attribute__((vector_size(32)));
+  Pot4 acc = {0, 0, 0, 0}, acc2 = {0, 0, 0, 0};
+  int k = k0;
+  for (; k + 1 < k1; k += 2) {
+    Pot4 l, l2;
+    std::memcpy(&l, L + kPot * terms[k][2], sizeof l);
+    std::memcpy(&l2, L + kPot * terms[k + 1][2], sizeof l2);
+    acc += l * w[terms[k][1]];
+    acc2 += l2 * w[terms[k + 1][1]];
+  }
+  if (k < k1) {
+    Pot4 l;
+    std::memcpy(&l, L + kPot * terms[k][2], sizeof l);
+    acc += l * w[terms[k][1]];
+  }
+  acc += acc2;
+  std::memcpy(out, &acc, sizeof acc);
+}
+
+// Four conversions into one target at once, one source per vector lane (the fast path of
+// downward(); convert() above is its plain twin and takes the remainder of a list): the
+// derivatives of 1/r at the four R = c_T - c_S by the recurrence of inverse_distance_derivatives,
+// the kept moments (gamma_z <= 1) gathered lane-wise, then per beta
+//     A_pot = sum_gamma M_(gamma, pot) D_(beta + gamma)   (lanes: sources),
+// psi corrected lane-wise (- R_j phi_j) and the lanes summed into L. terms4 index the kept moments.
+STOKESIAN_TREE_CLONES
+void convert4(const double* const* M, const double* rx, const double* ry, const double* rz, const MultiIndexSet& deriv,
+              const int* keep, int nkeep, const std::array<int, 2>* terms4, const int* begin, int nl, double* work,
+              double* L) {
+  typedef double V4 __attribute__((vector_size(32)));
+  V4 x, y, z;
+  std::memcpy(&x, rx, sizeof x);
+  std::memcpy(&y, ry, sizeof y);
+  std::memcpy(&z, rz, sizeof z);
+  V4* D = reinterpret_cast<V4*>(work);           // nl derivatives
+  V4* MV = D + nl;                                // nkeep x 4 potentials
+  const V4 inv_r2 = 1.0 / (x * x + y * y + z * z);
+  for (int l = 0; l < 4; ++l) D[0][l] = std::sqrt(inv_r2[l]);
+  for (int k = 1; k < deriv.size(); ++k) {
+    const MultiIndexSet::Recurrence& rc = deriv.recurrence(k);
+    const V4 acc = rc.first_weight[0] * x * D[rc.first[0]] + rc.first_weight[1] * y * D[rc.first[1]] +
+                   rc.first_weight[2] * z * D[rc.first[2]] + rc.second_weight[0] * D[rc.second[0]] +
+                   rc.second_weight[1] * D[rc.second[1]] + rc.second_weight[2] * D[rc.second[2]];
+    D[k] = -acc * inv_r2;
+  }
+  for (int c = 0; c < nkeep; ++c) {
+    const int g = kPot * keep[c];
+    for (int pot = 0; pot < kPot; ++pot) MV[kPot * c + pot] = V4{M[0][g + pot], M[1][g + pot], M[2][g + pot], M[3][g + pot]};
+  }
+  for (int b = 0; b < nl; ++b) {
+    const int k0 = begin[b], k1 = begin[b + 1];
+    if (k0 == k1) continue;
+    V4 a0 = {0, 0, 0, 0}, a1 = a0, a2 = a0, a3 = a0, c0 = a0, c1 = a0, c2 = a0, c3 = a0;  // two chains
+    int k = k0;
+    for (; k + 1 < k1; k += 2) {
+      const V4* m = MV + kPot * terms4[k][0];
+      const V4 d = D[terms4[k][1]];
+      const V4* m2 = MV + kPot * terms4[k + 1][0];
+      const V4 d2 = D[terms4[k + 1][1]];
+      a0 += m[0] * d;
+      a1 += m[1] * d;
+      a2 += m[2] * d;
+      a3 += m[3] * d;
+      c0 += m2[0] * d2;
+      c1 += m2[1] * d2;
+      c2 += m2[2] * d2;
+      c3 += m2[3] * d2;
+    }
+    if (k < k1) {
+      const V4* m = MV + kPot * terms4[k][0];
+      const V4 d = D[terms4[k][1]];
+      a0 += m[0] * d;
+      a1 += m[1] * d;
+      a2 += m[2] * d;
+      a3 += m[3] * d;
+    }
+    a0 += c0;
+    a1 += c1;
+    a2 += c2;
+    a3 += c3 - (x * a0 + y * a1 + z * a2);
+    double* l = L + kPot * b;
+    l[0] += (a0[0] + a0[1]) + (a0[2] + a0[3]);
+    l[1] += (a1[0] + a1[1]) + (a1[2] + a1[3]);
+    l[2] += (a2[0] + a2[1]) + (a2[2] + a2[3]);
+    l[3] += (a3[0] + a3[1]) + (a3[2] + a3[3]);
+  }
+}
+
 }  // namespace
 
 namespace {
@@ -293,17 +240,24 @@ double conversion_terms(int p, int k) {
   return t;
 }
 
-// Unit costs on one thread (measured with bench-like uniform clouds, N = 3e4, 2026-11-25; docs/tree.md):
-// a near pair (the vectorised closed forms of F, FT, FTS) and one
-// conversion (0.22 us of derivatives and bookkeeping + 1.37 ns per term).
-double pair_seconds(Moments m) { return m == Moments::F ? 8.5e-9 : (m == Moments::FT ? 17e-9 : 35e-9); }
-double conversion_seconds(int p, Moments m) { return 0.22e-6 + 1.37e-9 * conversion_terms(p, derivative_order(m)); }
+// Unit costs on one thread (fitted to the times of one product at N = 3e4, uniform cube, phi = 0.1,
+// leaf 64, theta 0.35-0.6, p 3-11, 2026-11-25, within 2.5 %; docs/tree.md): a near pair (the
+// vectorised closed forms of F, FT, FTS), one conversion (0.05 us + 0.40 ns per term) and, per
+// particle, the moments and the evaluation of its local expansion (22/25/29 ns per multi-index of
+// order p + k).
+double pair_seconds(Moments m) { return m == Moments::F ? 3.1e-9 : (m == Moments::FT ? 5.1e-9 : 11.3e-9); }
+double particle_seconds(int p, Moments m) {
+  const double per_index = m == Moments::F ? 22e-9 : (m == Moments::FT ? 25e-9 : 29e-9);
+  return per_index * multi_index_count(p + derivative_order(m));
+}
+double conversion_seconds(int p, Moments m) { return 0.05e-6 + 0.40e-9 * conversion_terms(p, derivative_order(m)); }
 
 }  // namespace
 
 double tree_error_model(const TreeParameters& p, Moments m) {
   const double geometric = std::pow(p.theta, p.order + 1);
-  return m == Moments::FTS ? 0.05 * (p.order + 1) * geometric : 0.1 * geometric;
+  if (m == Moments::FTS) return 0.05 * (p.order + 1) * geometric;
+  return std::max(0.2 / (p.order + 1), 0.025) * geometric;
 }
 
 namespace {
@@ -311,7 +265,8 @@ namespace {
 // Modelled seconds per particle of one product (fmm), one thread.
 double cost_per_particle(const TreeParameters& p, Moments m) {
   const double x = p.theta / 0.5;
-  return 1770 * std::pow(x, -2.5) * pair_seconds(m) + 10.8 * std::pow(x, -2.05) * conversion_seconds(p.order, m);
+  return 1770 * std::pow(x, -2.5) * pair_seconds(m) + 10.8 * std::pow(x, -2.05) * conversion_seconds(p.order, m) +
+         particle_seconds(p.order, m);
 }
 
 }  // namespace
@@ -422,6 +377,14 @@ TreeFarField::TreeFarField(const MobilitySpec& spec, const TreeParameters& param
       }
     m2l_term_begin_.push_back(int(m2l_terms_.size()));
   }
+  // the same terms on the kept moments (gamma_z <= 1), for convert4
+  std::vector<int> compact(static_cast<std::size_t>(ng), -1);
+  for (int g = 0; g < ng; ++g)
+    if (moment_set_[g][2] <= 1) {
+      compact[std::size_t(g)] = int(moment_keep_.size());
+      moment_keep_.push_back(g);
+    }
+  for (const auto& term : m2l_terms_) m2l_terms4_.push_back({compact[std::size_t(term[0])], term[1]});
 }
 
 void TreeFarField::set_configuration(const Configuration& c) {
@@ -646,7 +609,30 @@ void TreeFarField::downward(int t, const VecX& in, VecX& out) const {
   // conversions of the list (locals with beta_z <= 1), psi about the target's centre:
   // + (c_S - c_T)_j phi_j
   std::vector<double> D(static_cast<std::size_t>(nl));
-  for (int q = m2l_begin_[std::size_t(t)]; q < m2l_begin_[std::size_t(t) + 1]; ++q) {
+  const int q_end = m2l_begin_[std::size_t(t) + 1];
+  int q_first = m2l_begin_[std::size_t(t)];
+  if (q_end - q_first >= 4) {
+    const int nkeep = int(moment_keep_.size());
+    std::vector<double> work(static_cast<std::size_t>(4 * (nl + kPot * nkeep)) + 4);
+    // 32-byte alignment for the 4-wide vectors
+    double* w = work.data();
+    while (reinterpret_cast<std::uintptr_t>(w) % 32 != 0) ++w;
+    for (; q_first + 4 <= q_end; q_first += 4) {
+      const double* Ms[4];
+      double rx[4], ry[4], rz[4];
+      for (int l = 0; l < 4; ++l) {
+        const int s = m2l_source_[std::size_t(q_first + l)];
+        const OctreeNode& S = tree_.nodes[std::size_t(s)];
+        Ms[l] = moments_.data() + std::size_t(s) * kPot * std::size_t(ng);
+        rx[l] = T.centre[0] - S.centre[0];
+        ry[l] = T.centre[1] - S.centre[1];
+        rz[l] = T.centre[2] - S.centre[2];
+      }
+      convert4(Ms, rx, ry, rz, deriv_set_, moment_keep_.data(), nkeep, m2l_terms4_.data(), m2l_term_begin_.data(), nl,
+               w, L);
+    }
+  }
+  for (int q = q_first; q < q_end; ++q) {
     const int s = m2l_source_[std::size_t(q)];
     const OctreeNode& S = tree_.nodes[std::size_t(s)];
     const double* M = moments_.data() + std::size_t(s) * kPot * std::size_t(ng);
@@ -664,15 +650,9 @@ void TreeFarField::downward(int t, const VecX& in, VecX& out) const {
     // L_beta += sum_delta LP_(beta + delta) shift^delta / delta!  (scaled_powers takes -shift),
     // then psi about the child's centre: + (c_parent - c_child)_j phi_j
     scaled_powers(-shift, deriv_set_, tmp.data());
-    std::vector<double> Ls(static_cast<std::size_t>(kPot * nl), 0.0);
-    for (const auto& term : shift_terms_) {
-      const double w = tmp[std::size_t(term[1])];
-      const double* lp = LP + kPot * term[2];
-      double* l = Ls.data() + kPot * term[0];
-      for (int pot = 0; pot < kPot; ++pot) l[pot] += lp[pot] * w;
-    }
     for (int b = 0; b < nl; ++b) {
-      const double* l = Ls.data() + kPot * b;
+      double l[kPot];
+      shift_sum(LP, tmp.data(), shift_terms_.data(), shift_begin_[std::size_t(b)], shift_begin_[std::size_t(b) + 1], l);
       L[kPot * b] += l[0];
       L[kPot * b + 1] += l[1];
       L[kPot * b + 2] += l[2];
@@ -706,11 +686,9 @@ void TreeFarField::downward(int t, const VecX& in, VecX& out) const {
     for (int b = 0; b < nb; ++b) {
       const auto& be = beta_set_[b];
       const int bb = deriv_set_.index(be[0], be[1], be[2]);
-      for (int k = shift_begin_[std::size_t(bb)]; k < shift_begin_[std::size_t(bb) + 1]; ++k) {
-        const auto& term = shift_terms_[std::size_t(k)];
-        const double w = tmp[std::size_t(term[1])];
-        for (int pot = 0; pot < kPot; ++pot) P[std::size_t(pot * nb + b)] += L[kPot * term[2] + pot] * w;
-      }
+      double l[kPot];
+      shift_sum(L, tmp.data(), shift_terms_.data(), shift_begin_[std::size_t(bb)], shift_begin_[std::size_t(bb) + 1], l);
+      for (int pot = 0; pot < kPot; ++pot) P[std::size_t(pot * nb + b)] = l[pot];
     }
     double y[11] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0};
     add_responses(P.data(), nb, ix, R, ai, m_, y);

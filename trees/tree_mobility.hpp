@@ -56,18 +56,20 @@ struct TreeParameters {
 // The knobs from the requested relative accuracy t of a product (MobilitySpec::tolerance), the one
 // place where they are derived (docs/tree.md, "Knobs from the tolerance"). FMM evaluation;
 // theta in {0.15, 0.2, ..., 0.6} and the smallest p in [0, 20] whose error model
-//     e(theta, p) = C (p + 1)^s theta^(p+1)   (F, FT: C = 0.1, s = 0; FTS: C = 0.05, s = 1)
+//     e(theta, p) = C(p) theta^(p+1),  C(p) = max(0.2 / (p + 1), 0.025) (F, FT), 0.05 (p + 1) (FTS)
 // stays at or below t, choosing the pair of least modelled cost per particle
-//     n_pair(theta) c_pair + n_conv(theta) (c_conv + terms(p) c_term),
+//     n_pair(theta) c_pair + n_conv(theta) (c_conv + terms(p) c_term) + c_index (p+k+1)(p+k+2)(p+k+3)/6,
 // n_pair = 1770 (theta/0.5)^-2.5 near pairs and n_conv = 10.8 (theta/0.5)^-2.05 conversions per
 // particle (geometric means of the counts at N = 1e4 ... 3e5, phi = 0.1, tuned leaves), terms(p)
-// the terms of one conversion after
-// the harmonic reduction, c_pair = 8.5/17/35 ns (F/FT/FTS), c_conv = 0.22 us, c_term = 1.37 ns
-// (measured, one thread). Leaf size 0: tuned per configuration among 32, 64, 128 by the same unit
-// costs on the counted pairs and conversions (TreeFarField::set_configuration). The constants C
-// bound the errors measured in tests/test_tree_mobility.cpp (uniform, polydisperse) with a margin;
-// the test checks achieved <= requested from 1e-2 to 1e-12. Throws std::invalid_argument for t
-// outside [1e-14, 0.5] (1e-14 is the floor of the engine's knobs, engine/accuracy.cpp).
+// the terms of one conversion after the harmonic reduction, c_pair = 3.1/5.1/11.3 ns (F/FT/FTS),
+// c_conv = 0.05 us, c_term = 0.40 ns and c_index = 22/25/29 ns (moments and evaluation per
+// particle; one thread, fitted within 2.5 %). Leaf size 0: tuned per configuration among 32, 64,
+// 128 by the same unit costs on the counted pairs and conversions (TreeFarField::set_configuration).
+// C(p) bounds the largest error measured for theta 0.2-0.7 on uniform, clustered and radius-ratio-10
+// clouds with leaves of 16 (bench_tree kind 2; F: 0.19, 0.094, 0.052, 0.036, 0.029, 0.023, 0.021,
+// 0.021 at p = 0, 1, 2, 3, 4, 6, 8, 10); tests/test_tree_mobility.cpp checks achieved <= requested
+// from 1e-2 to 1e-12. Throws std::invalid_argument for t outside [1e-14, 0.5] (1e-14 is the floor
+// of the engine's knobs, engine/accuracy.cpp).
 TreeParameters tree_parameters(double tolerance, Moments m);
 
 // `far_field = "auto"` in open domains picks the tree from this N on (0: never), with t the
@@ -141,6 +143,8 @@ class TreeFarField final : public stokesian::MobilityOperator {
   std::vector<std::array<int, 2>> m2l_terms_;
   std::vector<int> shift_begin_;     // terms of beta: shift_terms_[shift_begin_[beta] ..)
   std::vector<int> m2l_term_begin_;  // terms of beta: m2l_terms_[m2l_term_begin_[beta] ..)
+  std::vector<int> moment_keep_;     // gamma with gamma_z <= 1 (the moments the reduction keeps)
+  std::vector<std::array<int, 2>> m2l_terms4_;  // m2l_terms_ with gamma as its position in moment_keep_
   // harmonic reduction: (gamma, gamma - 2e_z + 2e_x, gamma - 2e_z + 2e_y), likewise for beta
   std::vector<std::array<int, 3>> moment_fold_, local_rebuild_;
   // fmm interaction lists per target node (CSR): sources converted (m2l) and leaf pairs (p2p)
