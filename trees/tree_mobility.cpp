@@ -272,10 +272,8 @@ double cost_per_particle(const TreeParameters& p, Moments m) {
 }  // namespace
 
 long tree_auto_from(double tolerance, Moments m) {
-  (void)m;  // one rule for F, FT and FTS (FTS breaks even earlier, so the rule is conservative there)
-  if (!(tolerance > 0)) return 0;
-  if (tolerance >= 1e-3) return 1000;
-  return long(std::ceil(std::pow(10.0, 3.0 + (-3.0 - std::log10(tolerance)) / 3.0)));
+  (void)m;  // one rule for F, FT and FTS
+  return tolerance > 0 ? 1000 : 0;
 }
 
 double tree_product_seconds(const TreeParameters& p, Moments m, double n) { return n * cost_per_particle(p, m); }
@@ -336,6 +334,18 @@ TreeFarField::TreeFarField(const MobilitySpec& spec, const TreeParameters& param
   const int nl = deriv_set_.size();
   for (int b = 0; b < nl; ++b) {
     shift_begin_.push_back(int(shift_terms_.size()));
+  // Moment shift to a parent's centre (upward pass): M'_gamma = sum_(delta <= gamma) M_(gamma - delta)
+  // w_delta, grouped by gamma, as (gamma, delta, gamma - delta).
+  for (int g = 0; g < ng; ++g) {
+    m2m_begin_.push_back(int(m2m_terms_.size()));
+    const auto& ga = moment_set_[g];
+    for (int dl = 0; dl < ng; ++dl) {
+      const auto& de = moment_set_[dl];
+      if (de[0] <= ga[0] && de[1] <= ga[1] && de[2] <= ga[2])
+        m2m_terms_.push_back({g, dl, moment_set_.index(ga[0] - de[0], ga[1] - de[1], ga[2] - de[2])});
+    }
+  }
+  m2m_begin_.push_back(int(m2m_terms_.size()));
     const auto& be = deriv_set_[b];
     for (int g = 0; g < nl; ++g) {
       const auto& al = deriv_set_[g];
@@ -485,19 +495,45 @@ void TreeFarField::build_interaction_lists() {
 
 // Moments of the four potentials of every node, summed from its particles (the source terms of
 // the header). M[pot][g] multiplies d^g G(x - c).
+// Moments of every node, deepest level first: a leaf's from its particles (P2M), an inner node's by
+// shifting its children's (M2M, exact for the truncated moments): with Delta = c_child - c_node,
+//   M_gamma += sum_(delta <= gamma) M^child_(gamma - delta) (-Delta)^delta / delta!
+// for each potential, then psi += Delta_j phi_j (psi's charges and dipoles carry s = x - c).
 void TreeFarField::compute_moments(const VecX& in) const {
   const int d = dof_per_particle(m_);
   const int ng = moment_set_.size();
   const long nodes = long(tree_.nodes.size());
   const bool torque = has_torque(m_), stresslet = has_stresslet(m_);
+  std::vector<std::vector<int>> levels(static_cast<std::size_t>(tree_.depth) + 1);
+  for (long k = 0; k < nodes; ++k) levels[std::size_t(tree_.nodes[std::size_t(k)].level)].push_back(int(k));
 #pragma omp parallel
   {
     std::vector<double> w(static_cast<std::size_t>(ng));
+    for (int level = tree_.depth; level >= 0; --level) {
+      const std::vector<int>& at = levels[std::size_t(level)];
 #pragma omp for schedule(dynamic, 4)
-    for (long k = 0; k < nodes; ++k) {
+    for (std::size_t n = 0; n < at.size(); ++n) {
+      const int k = at[n];
       const OctreeNode& node = tree_.nodes[std::size_t(k)];
       double* M = moments_.data() + std::size_t(k) * kPot * std::size_t(ng);
       std::fill(M, M + kPot * ng, 0.0);
+      if (!node.leaf()) {
+        for (int c = node.first_child; c < node.first_child + node.child_count; ++c) {
+          const double* MC = moments_.data() + std::size_t(c) * kPot * std::size_t(ng);
+          const Vec3 delta = tree_.nodes[std::size_t(c)].centre - node.centre;
+          scaled_powers(delta, moment_set_, w.data());
+          for (int g = 0; g < ng; ++g) {
+            double l[kPot];
+            shift_sum(MC, w.data(), m2m_terms_.data(), m2m_begin_[std::size_t(g)], m2m_begin_[std::size_t(g) + 1], l);
+            double* mg = M + kPot * g;
+            mg[0] += l[0];
+            mg[1] += l[1];
+            mg[2] += l[2];
+            mg[3] += l[3] + delta[0] * l[0] + delta[1] * l[1] + delta[2] * l[2];
+          }
+        }
+        continue;
+      }
       for (int q = node.begin; q < node.end; ++q) {
         const std::size_t i = std::size_t(tree_.order[std::size_t(q)]);
         const double* src = in.data() + long(i) * d;
@@ -544,6 +580,7 @@ void TreeFarField::compute_moments(const VecX& in) const {
           }
         }
       }
+    }
     }
   }
 }

@@ -74,9 +74,10 @@ TreeParameters tree_parameters(double tolerance, Moments m);
 
 // `far_field = "auto"` in open domains picks the tree from this N on (0: never), with t the
 // products' tolerance: the measured crossover of one product with the direct sum (uniform cloud,
-// phi = 0.1, radii 0.5-1.5, 2 threads, 2026-11-25; docs/tree.md "Crossover"): equal times near
-// N = 1000 at t = 1e-3, 2000 at 1e-4, 1e4 at 1e-6 (F; FT 5000; FTS 1000, 1000, 2000), so
-//     N = 1000 for t >= 1e-3, 10^(3 + (-3 - log10 t)/3) below (F, FT and FTS).
+// phi = 0.1, radii 0.5-1.5, 2 threads, 2026-11-25; docs/tree.md "Crossover"): the tree
+// is as fast as the direct sum at N = 1000 and faster beyond, F and FTS, t = 1e-3 ... 1e-10 (its
+// exact near pairs are vectorised closed forms; the direct sum uses the general pair kernel), so
+//     N = 1000 for every t (F, FT and FTS).
 long tree_auto_from(double tolerance, Moments m);
 
 // Modelled relative error of a product with these parameters (the model above).
@@ -142,6 +143,8 @@ class TreeFarField final : public stokesian::MobilityOperator {
   std::vector<std::array<int, 3>> shift_terms_;
   std::vector<std::array<int, 2>> m2l_terms_;
   std::vector<int> shift_begin_;     // terms of beta: shift_terms_[shift_begin_[beta] ..)
+  std::vector<std::array<int, 3>> m2m_terms_;  // moment shift (gamma, delta, gamma - delta), by gamma
+  std::vector<int> m2m_begin_;
   std::vector<int> m2l_term_begin_;  // terms of beta: m2l_terms_[m2l_term_begin_[beta] ..)
   std::vector<int> moment_keep_;     // gamma with gamma_z <= 1 (the moments the reduction keeps)
   std::vector<std::array<int, 2>> m2l_terms4_;  // m2l_terms_ with gamma as its position in moment_keep_
