@@ -193,7 +193,7 @@ TEST_CASE("tree product: radius ratio 10, overlapping and nested spheres, agains
     CAPTURE(m);
     const double e_fmm = tree_error(c, m, {0.4, 8, 16, TreeEvaluation::fmm});
     const double e_bh = tree_error(c, m, {0.4, 8, 16, TreeEvaluation::barnes_hut});
-    MESSAGE(to_string(m) << " fmm " << e_fmm << " bh " << e_bh);
+    MESSAGE(std::string(to_string(m)) << " fmm " << e_fmm << " bh " << e_bh);
     // the same bound as for equal spheres: error below theta^(p+1) = 2.6e-4
     CHECK(e_fmm < std::pow(0.4, 9));
     CHECK(e_bh < std::pow(0.4, 9));
@@ -254,7 +254,7 @@ TEST_CASE("knobs from the tolerance: achieved <= requested from 1e-2 to 1e-12 (u
       CHECK(tree_error_model(p, m) <= t);
       for (std::size_t k = 0; k < clouds.size(); ++k) {
         const double err = tree_error(clouds[k], m, p, unsigned(30 + k));
-        MESSAGE(to_string(m) << " tol " << t << " theta " << p.theta << " p " << p.order << " cloud " << k
+        MESSAGE(std::string(to_string(m)) << " tol " << t << " theta " << p.theta << " p " << p.order << " cloud " << k
                              << " error " << err << " ratio " << err / t);
         CHECK(err <= t);
       }
