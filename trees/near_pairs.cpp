@@ -158,15 +158,7 @@ NEAR_INLINE void sum_pairs(const Inputs& P, int begin, int end, const Target& t,
 
 }  // namespace
 
-// Near pairs of the fmm path (the hot loop): sources in tree order as separate
-// coordinate arrays, so that the loop over a source leaf vectorises. Separated pairs (r >= a_i + a_j)
-// use the closed forms of engine/kernels/mobility_pair.cpp (separated_scalars), with d = x_i - x_j,
-// u = 1/r, c = (a_i^2 + a_j^2)/3 and k = 1/(8 pi mu), for F and FT
-//   U_i += k [u (1 + c u^2) F + u^3 (1 - 3 c u^2) (d.F) d + u^3 T x d],
-//   W_i += k [u^3 F x d - u^3/2 T + 3/2 u^5 (d.T) d],
-// and for FTS every block of mobility::apply_pair written out with its separated scalars;
-// the other pairs (overlapping, nested; rare) go through mobility::pair_scalars. The sum over
-// [begin, end) skips the target's own position qi.
+// The formulas: trees/near_pairs.hpp. The sum over [begin, end) skips the target's own position qi.
 STOKESIAN_TREE_CLONES
 void add_pairs_sorted(const SortedSources& src, int begin, int end, int qi, double ai, double mu, Moments m,
                       double* yi, long& count) {

@@ -1,11 +1,20 @@
 #pragma once
-// The near-pair loop of the octree far field (trees/tree_mobility.cpp, fmm path): sources in tree
-// order as separate coordinate arrays, so that the loop over a source leaf vectorises.
-// The loop takes four sources at a time on 4-wide vectors (GCC vector extensions) and the remainder
-// one by one, with the same kernel body; near_pairs.cpp is compiled with -fno-math-errno (so that
-// the square roots vectorise) and -fno-trapping-math (CMakeLists.txt). Results differ from the
-// plain kernel by rounding only (tests/test_tree_mobility.cpp compares with the direct product)
-// and are the same on any thread count.
+// Exact near pairs of the octree far field (trees/tree_mobility.cpp, fmm path).
+//
+// Mathematics: the Rotne-Prager-Yamakawa blocks of two separated spheres (r >= a_i + a_j), the
+// closed forms of engine/kernels/mobility_pair.cpp (separated_scalars; docs/mobility.md). With
+// d = x_i - x_j, u = 1/r, c = (a_i^2 + a_j^2)/3 and k = 1/(8 pi mu), for F and FT
+//   U_i += k [u (1 + c u^2) F + u^3 (1 - 3 c u^2) (d.F) d + u^3 T x d],
+//   W_i += k [u^3 F x d - u^3/2 T + 3/2 u^5 (d.T) d],
+// and for FTS every block of mobility::apply_pair written out with its separated scalars.
+// Overlapping and nested pairs (rare) go through mobility::pair_scalars.
+//
+// Sources are in tree order as separate coordinate arrays. The loop takes four sources at a time
+// on 4-wide vectors (GCC vector extensions) and the remainder one by one, with the same kernel
+// body; near_pairs.cpp is compiled with -fno-math-errno (so that the square roots vectorise) and
+// -fno-trapping-math (CMakeLists.txt). Results differ from the plain kernel by rounding only
+// (tests/test_tree_mobility.cpp compares with the direct product) and are the same on any thread
+// count.
 #include "trees/tree_mobility.hpp"
 
 namespace stokesian::trees {
