@@ -82,12 +82,16 @@ for i, p in enumerate([q for q in ps if q >= 0]):
     col = cmap(i / max(1, len(ps) - 1))
     ax.loglog(th, er, "o-", color=col, label=f"p = {int(p)}", ms=4)
     ax.loglog(th, er[-1] * (th / th[-1]) ** (p + 1), ":", color=col, lw=1)
+    for st, ls in ((1, "--"), (2, "-.")):  # clustered (8 dense balls), radius ratio 10
+        rz = sorted(sel(kind=2, set=st, dof=3, p=p), key=lambda r: r["params"]["theta"])
+        if rz:
+            ax.loglog([r["params"]["theta"] for r in rz], [r["phases"]["error"] for r in rz], ls, color=col, lw=0.8)
 rs = sorted(sel(kind=2, set=0, dof=3, p=-1), key=lambda r: r["params"]["theta"])
 if rs:
     ax.loglog([r["params"]["theta"] for r in rs], [r["phases"]["error"] for r in rs], "ks-", label="Barnes-Hut p = 0")
 ax.set_xlabel("theta")
 ax.set_ylabel("relative error against the direct product")
-ax.set_title("(c) F, uniform cloud: error against theta (dotted: theta^(p+1))")
+ax.set_title("(c) F: error vs theta; uniform (o), clustered (--), radius ratio 10 (-.)", fontsize=9)
 ax.legend(fontsize=7, ncol=2)
 ax.grid(True, which="both", alpha=0.3)
 
