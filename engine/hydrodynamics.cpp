@@ -6,9 +6,9 @@
 
 namespace stokesian {
 
-Hydrodynamics::Hydrodynamics(const ResolvedModel& model, double viscosity, const AmbientFlow& flow, double tolerance,
-                             lubrication::NearFieldParams near_field, double radius_ratio)
-    : model_(model), flow_(flow) {
+Hydrodynamics::Hydrodynamics(const ResolvedModel& model, double viscosity, std::shared_ptr<const AmbientField> flow,
+                             double tolerance, lubrication::NearFieldParams near_field, double radius_ratio)
+    : model_(model), flow_(std::move(flow)) {
   const SolverEntry* solver = hydro_solvers().find(solver_of(model_));
   if (!solver) throw std::invalid_argument("Hydrodynamics: no solver \"" + solver_of(model_) + "\"");
   SolverSetup setup;
@@ -43,7 +43,7 @@ std::vector<PreparePhase> Hydrodynamics::prepare_phases(const Configuration& c) 
 HydroResult Hydrodynamics::solve(const Configuration& c, const std::vector<char>& fixed, const std::vector<Vec3>& F,
                                  const std::vector<Vec3>& T, const VecX* noise) {
   FlowSample sample;
-  flow_.sample(c.x, sample);
+  flow_->sample(c.x, sample);
   return solver_->solve(HydroProblem{c, fixed, sample, F, T, noise && noise->size() ? noise : nullptr});
 }
 

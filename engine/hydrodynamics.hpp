@@ -15,8 +15,12 @@ namespace stokesian {
 class Hydrodynamics {
  public:
   // radius_ratio: a_max / a_min of the particles (accuracy knobs, engine/accuracy.hpp).
+  Hydrodynamics(const ResolvedModel& model, double viscosity, std::shared_ptr<const AmbientField> flow,
+                double tolerance, lubrication::NearFieldParams near_field = {}, double radius_ratio = 1.0);
+  // A linear ambient flow (tests, one-off solves).
   Hydrodynamics(const ResolvedModel& model, double viscosity, const AmbientFlow& flow, double tolerance,
-                lubrication::NearFieldParams near_field = {}, double radius_ratio = 1.0);
+                lubrication::NearFieldParams near_field = {}, double radius_ratio = 1.0)
+      : Hydrodynamics(model, viscosity, std::make_shared<AmbientFlow>(flow), tolerance, near_field, radius_ratio) {}
 
   // Set-up at a configuration; skipped when it equals the last prepared one.
   void prepare(const Configuration& c);
@@ -41,11 +45,11 @@ class Hydrodynamics {
 
   HydroSolver& solver() { return *solver_; }
   const ResolvedModel& model() const { return model_; }
-  const AmbientField& flow() const { return flow_; }
+  const AmbientField& flow() const { return *flow_; }
 
  private:
   ResolvedModel model_;
-  AmbientFlow flow_;
+  std::shared_ptr<const AmbientField> flow_;
   std::unique_ptr<HydroSolver> solver_;
   StoredConfiguration prepared_;  // the last prepared configuration
 };

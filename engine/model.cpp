@@ -2,6 +2,7 @@
 
 #include "engine/accuracy.hpp"
 #include "engine/core/errors.hpp"
+#include "engine/core/channel.hpp"
 #include "engine/core/flow.hpp"
 #include "engine/methods.hpp"
 #include "engine/pair_forces.hpp"
@@ -22,12 +23,19 @@ namespace {
 // about half a radius the far field alone misses the lubrication forces by more than a few percent.
 constexpr double kNearGap = 0.5;
 
+// Pairs of two fixed particles (e.g. neighbouring wall particles) never move relative to each other:
+// they need no lubrication for the motion and are left out of the level choice.
+bool both_fixed(const Scene& s, std::size_t i, std::size_t j) {
+  return !s.fixed.empty() && s.fixed[i] && s.fixed[j];
+}
+
 // Smallest surface gap over all pairs (open or minimum image), O(N^2) but run once per scene.
 double min_gap(const Scene& s) {
   double g = INFINITY;
   for (std::size_t i = 0; i < s.positions.size(); ++i)
     for (std::size_t j = i + 1; j < s.positions.size(); ++j)
-      g = std::min(g, s.domain.minimum_image(s.positions[i] - s.positions[j]).norm() - s.radii[i] - s.radii[j]);
+      if (!both_fixed(s, i, j))
+        g = std::min(g, s.domain.minimum_image(s.positions[i] - s.positions[j]).norm() - s.radii[i] - s.radii[j]);
   return g;
 }
 
@@ -35,7 +43,8 @@ double min_gap(const Scene& s) {
 double min_gap_below(const Scene& s, double gap) {
   double g = INFINITY;
   for (const auto& p : trees::nearest_image_pairs(s.positions, s.radii, s.domain, gap))
-    g = std::min(g, p.dist - s.radii[std::size_t(p.i)] - s.radii[std::size_t(p.j)]);
+    if (!both_fixed(s, std::size_t(p.i), std::size_t(p.j)))
+      g = std::min(g, p.dist - s.radii[std::size_t(p.i)] - s.radii[std::size_t(p.j)]);
   return g;
 }
 
@@ -134,7 +143,8 @@ ResolvedModel resolve_model(const Scene& s) {
       }
     }
   }
-  const AmbientFlow flow = ambient_flow(s.flow);
+  const std::shared_ptr<const AmbientField> field = make_ambient_field(s.flow, s.walls, s.domain);
+  const AmbientField& flow = *field;
   m.brownian = s.fluid.kT > 0.0;
   m.fixed_particles = std::any_of(s.fixed.begin(), s.fixed.end(), [](char c) { return c != 0; });
   m.reasons.push_back(m.brownian ? "fluid.kT > 0: Brownian motion on" : "fluid.kT = 0: athermal");
@@ -349,11 +359,12 @@ ResolvedModel resolve_model(const Scene& s) {
       m.reasons.push_back("Brownian stress: [brownian] stress_every = " + std::to_string(m.brownian_stress_every) +
                           (m.brownian_stress_every ? " (two solves more on each sampled step)" : ": not sampled"));
     } else {
-      const bool flow = s.flow.kind != FlowParams::Kind::none;
+      // A linear flow (the bulk viscosity); a channel flow has no uniform rate to refer it to.
+      const bool flow = s.flow.kind == FlowParams::Kind::simple_shear || s.flow.kind == FlowParams::Kind::planar_extension;
       m.brownian_stress_every = flow ? 1 : 0;
-      m.reasons.push_back(flow ? "auto Brownian stress: ambient flow -> sampled every step for the viscosity (two solves "
+      m.reasons.push_back(flow ? "auto Brownian stress: linear ambient flow -> sampled every step for the viscosity (two solves "
                                  "more per step; [brownian] stress_every = 0 to skip)"
-                               : "auto Brownian stress: no ambient flow -> not sampled ([brownian] stress_every = 1 to "
+                               : "auto Brownian stress: no linear ambient flow -> not sampled ([brownian] stress_every = 1 to "
                                  "sample it every step)");
     }
   }

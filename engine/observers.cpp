@@ -1,5 +1,6 @@
 #include "engine/observers.hpp"
 
+#include "engine/core/channel.hpp"
 #include "engine/core/errors.hpp"
 #include "engine/core/flow.hpp"
 #include "engine/core/sym_traceless.hpp"
@@ -149,6 +150,99 @@ class BulkStress final : public Observer {
   bool fts_, pairs_, brownian_, brownian_stresslet_;
 };
 
+// Channels ([walls], engine/core/channel.hpp, docs/channels.md). Held forces F are those exerted on
+// the fluid; the fluid's force on a held particle is -F.
+//   wall_force: sum of F over the wall particles.
+//   pressure_drop_particles (slit, duct): -sum_{held} F_x / A over every held particle (walls and any
+//     fixed obstacle), A the cross-section (Lee et al. 2024 §3.2, read as in method note P17).
+//   wall_shear_stress, wall_normal_stress [walls][sections]: per wall (slit: bottom, top; duct: also
+//     the side walls at -z, +z) and per section along x, the fluid's streamwise force on its wall
+//     particles per wall area, sum(-F_x) / A_ws, and the force pushing them out of the fluid,
+//     sum(F . n) / A_ws (n the wall's normal into the fluid); A_ws = section length x wall span.
+//   volume_fraction_sections [sections]: interior particle volume (by centre) over the section's
+//     fluid volume.
+// Sections split x into `[walls] sections` equal parts: [0, Lx) in a periodic box, the walls' extent
+// [-length/2, length/2] about the centre in an open domain (particles beyond go to the end sections).
+class ChannelOutputs final : public Observer {
+ public:
+  explicit ChannelOutputs(const Scene& scene)
+      : c_(scene.walls),
+        d_(scene.domain),
+        walls_(scene.wall_count),
+        area_(cross_section_area(scene.walls, scene.domain)),
+        sections_(std::max(1L, scene.walls.sections)) {
+    x0_ = d_.periodic() ? 0.0 : -0.5 * c_.length;
+    len_ = d_.periodic() ? d_.box.x() : c_.length;
+    nw_ = c_.kind == ChannelParams::Kind::duct ? 4 : c_.kind == ChannelParams::Kind::slit ? 2 : 1;
+  }
+  void observe(const State& s, const Evaluation& ev, Frame& f) const override {
+    const std::size_t n = s.size();
+    Vec3 wall = Vec3::Zero();
+    double held_x = 0.0;
+    const std::size_t ns = std::size_t(sections_), nw = std::size_t(nw_);
+    std::vector<double> shear(nw * ns, 0.0), normal(nw * ns, 0.0), vol(ns, 0.0);
+    const Vec3 ctr = channel_centre(d_);
+    for (std::size_t i = 0; i < n && i < ev.hydro.F.size(); ++i) {
+      const Vec3& F = ev.hydro.F[i];
+      if (!s.fixed.empty() && s.fixed[i]) held_x += F.x();
+      const std::size_t sec = section(s.position[i].x());
+      if (i < n - walls_) {
+        vol[sec] += 4.0 / 3.0 * kPi * std::pow(s.radius[i], 3);
+        continue;
+      }
+      wall += F;
+      // Which wall: the boundary the particle lies furthest beyond (duct corners go to the y walls).
+      const Vec3 r = s.position[i] - ctr;
+      std::size_t w = 0;
+      Vec3 normal_in(0, 1, 0);
+      if (c_.kind != ChannelParams::Kind::plane) {
+        const bool zwall = c_.kind == ChannelParams::Kind::duct &&
+                           std::abs(r.z()) - 0.5 * c_.width > std::abs(r.y()) - 0.5 * c_.height;
+        if (zwall) {
+          w = r.z() < 0 ? 2 : 3;
+          normal_in = Vec3(0, 0, r.z() < 0 ? 1.0 : -1.0);
+        } else {
+          w = r.y() < 0 ? 0 : 1;
+          normal_in = Vec3(0, r.y() < 0 ? 1.0 : -1.0, 0);
+        }
+      }
+      shear[w * ns + sec] += -F.x();
+      normal[w * ns + sec] += F.dot(normal_in);
+    }
+    const double seg = len_ / double(ns);
+    for (std::size_t w = 0; w < nw; ++w) {
+      const double span = w >= 2 ? c_.height : c_.kind == ChannelParams::Kind::duct ? c_.width
+                                                : (d_.periodic() ? d_.box.z() : c_.depth);
+      for (std::size_t k = 0; k < ns; ++k) {
+        shear[w * ns + k] /= seg * span;
+        normal[w * ns + k] /= seg * span;
+      }
+    }
+    f.observables["wall_force"] = Field{{3}, {wall.x(), wall.y(), wall.z()}, units::force, false};
+    f.observables["wall_shear_stress"] = Field{{nw_, sections_}, shear, units::stress, false};
+    f.observables["wall_normal_stress"] = Field{{nw_, sections_}, normal, units::stress, false};
+    if (area_ > 0.0) {
+      f.set_scalar("pressure_drop_particles", -held_x / area_, units::stress);
+      for (double& v : vol) v /= seg * area_;
+      f.observables["volume_fraction_sections"] = Field{{sections_}, vol, "", false};
+    }
+  }
+
+ private:
+  std::size_t section(double x) const {
+    double t = (x - x0_) / len_;
+    if (d_.periodic()) t -= std::floor(t);
+    const long k = long(std::floor(t * double(sections_)));
+    return std::size_t(std::clamp(k, 0L, long(sections_) - 1));
+  }
+  ChannelParams c_;
+  Domain d_;
+  std::size_t walls_;
+  double area_;
+  int sections_ = 1, nw_ = 1;
+  double x0_ = 0.0, len_ = 1.0;
+};
+
 class Gaps final : public Observer {
  public:
   void observe(const State& s, const Evaluation& ev, Frame& f) const override {
@@ -198,6 +292,7 @@ std::vector<std::unique_ptr<Observer>> make_observers(const Scene& scene, const 
       obs.push_back(std::make_unique<RecordedOutput>(e));
   if (has_stresslet(model.moments)) obs.push_back(std::make_unique<StressletSum>());
   if (scene.domain.periodic()) obs.push_back(std::make_unique<BulkStress>(scene, model));
+  if (scene.walls.any()) obs.push_back(std::make_unique<ChannelOutputs>(scene));
   obs.push_back(std::make_unique<Gaps>());
   obs.push_back(std::make_unique<RunStatistics>());
   return obs;

@@ -14,7 +14,8 @@
 //                 image; +inf for a single particle), pair_energy, krylov_iterations (integer), dt,
 //                 stresslet_sum (FTS: sum of the stresslets, 6 components); periodic boxes: stress and
 //                 stress_<part> (engine/stress.hpp), brownian_samples, and in simple shear
-//                 relative_viscosity[_<part>], N1[_<part>], N2[_<part>] (docs/output.md).
+//                 relative_viscosity[_<part>], N1[_<part>], N2[_<part>]; scenes with [walls]:
+//                 wall_force and (slit, duct) pressure_drop_particles (docs/output.md, docs/channels.md).
 #include "engine/core/frame.hpp"
 #include "engine/core/registry.hpp"
 #include "engine/core/scene.hpp"

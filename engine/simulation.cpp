@@ -1,5 +1,7 @@
 #include "engine/simulation.hpp"
 
+#include "engine/core/channel.hpp"
+
 #include "engine/core/errors.hpp"
 #include "engine/core/parallel.hpp"
 #include "engine/methods.hpp"
@@ -55,7 +57,7 @@ Simulation::Simulation(Scene scene)
     : scene_(std::move(scene)),
       model_(resolve_model(scene_)),
       strain_rate_(lattice_strain_rate(scene_.flow, scene_.domain)),
-      hydro_(model_, scene_.fluid.viscosity, ambient_flow(scene_.flow), scene_.hydro.tolerance,
+      hydro_(model_, scene_.fluid.viscosity, make_ambient_field(scene_.flow, scene_.walls, scene_.domain), scene_.hydro.tolerance,
              lubrication::near_field_params(scene_.hydro, model_.moments), radius_ratio(scene_.radii)),
       integrator_(integrators().find(model_.integrator)->make(scene_.time)),
       observers_(make_observers(scene_, model_)) {}

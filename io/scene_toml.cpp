@@ -2,10 +2,13 @@
 
 #include "engine/core/errors.hpp"
 #include "engine/core/memory.hpp"
+#include "io/flow_table.hpp"
 #include "io/h5md.hpp"
 #include "io/xyz.hpp"
 #include "trees/neighbor_list.hpp"
 #include "trees/placement.hpp"
+#include "trees/walls.hpp"
+#include "engine/core/channel.hpp"
 
 #include <toml++/toml.h>
 
@@ -288,6 +291,7 @@ void read_particles(const Reader& R, const toml::table& t, Scene& s, const std::
     if (t.contains("equilibration_sweeps") && p.pattern != PlacementParams::Pattern::random)
       R.fail(t.get("equilibration_sweeps"), "[particles] equilibration_sweeps", "only meaningful with generate = \"random\"");
     p.equilibration_sweeps = R.integer(t, T, "equilibration_sweeps", p.equilibration_sweeps, 0, 1000000);
+    p.channel = s.walls;
     if (t.contains("region") && s.domain.periodic())
       R.fail(t.get("region"), "[particles] region", "only meaningful in an open domain (a periodic box is filled whole)");
     p.region = R.choice(t, T, "region", "sphere", {"sphere", "cube"}) == "cube" ? PlacementParams::Region::cube
@@ -308,7 +312,7 @@ void read_particles(const Reader& R, const toml::table& t, Scene& s, const std::
         else if (p.sizes == PlacementParams::Sizes::lognormal)
           mean_a3 = a3 * std::exp(4.5 * p.sigma * p.sigma);
         // Checked as a number before anything is allocated for it.
-        const double count = std::round(p.volume_fraction * s.domain.box.prod() / (4.0 / 3.0 * kPi * mean_a3));
+        const double count = std::round(p.volume_fraction * fluid_volume(s.walls, s.domain.box) / (4.0 / 3.0 * kPi * mean_a3));
         if (!(count >= 1 && count <= double(kMaxCount))) {
           std::ostringstream o;
           o << "value " << p.volume_fraction << " gives count = round(phi V / mean sphere volume) = " << count
@@ -319,6 +323,9 @@ void read_particles(const Reader& R, const toml::table& t, Scene& s, const std::
       }
     } else {
       if (!t.contains("count")) R.fail(&t, "[particles] count", "required with generate in an open domain");
+      if (s.walls.any())
+        R.fail(t.get("generate"), "[particles] generate",
+               "fills a channel only in a periodic box (an open domain's walls are finite patches); give positions or file");
       p.count = R.integer(t, T, "count", 0, 1, kMaxCount);
     }
     // Memory of the generated particles, checked before any is placed (docs/reliability.md).
@@ -345,7 +352,7 @@ void read_particles(const Reader& R, const toml::table& t, Scene& s, const std::
         mean_a3 *= 1.0 - p.large_fraction + p.large_fraction * std::pow(p.radius_ratio, 3);
       else if (p.sizes == PlacementParams::Sizes::lognormal)
         mean_a3 *= std::exp(4.5 * p.sigma * p.sigma);
-      phi = double(p.count) * 4.0 / 3.0 * kPi * mean_a3 / s.domain.box.prod();
+      phi = double(p.count) * 4.0 / 3.0 * kPi * mean_a3 / fluid_volume(s.walls, s.domain.box);
     }
     const std::string limits =
         "allowed: generate = \"random\" up to volume fraction " + Reader::brief(kRandomMaxPhi) + " (" +
@@ -437,6 +444,94 @@ void check_particles(const Reader& R, const toml::table& t, const Scene& s, cons
         << " a apart, radii " << ai << " and " << aj << "; allowed overlap at most half the smaller radius)";
       R.fail(node, w, o.str());
     }
+  }
+}
+
+
+// [walls] (docs/channels.md): the channel geometry and its wall particles (generated later, after
+// the interior particles, by append_walls).
+void read_walls(const Reader& R, const toml::table& t, Scene& s) {
+  const std::string T = "walls";
+  R.only(t, T, {"kind", "height", "width", "length", "depth", "radius", "gap", "layers", "sections"});
+  ChannelParams& c = s.walls;
+  c.kind = R.name(t, T, "kind", ChannelParams::Kind::none);
+  if (!c.any()) {
+    for (const char* key : {"height", "width", "length", "depth", "radius", "gap", "layers", "sections"})
+      if (t.contains(key)) R.fail(t.get(key), std::string("[walls] ") + key, "only meaningful with a wall kind (kind = \"plane\", \"slit\" or \"duct\")");
+    return;
+  }
+  const bool per = s.domain.periodic();
+  using K = ChannelParams::Kind;
+  auto need = [&](const char* key, bool needed, const std::string& why) {
+    if (needed && !t.contains(key)) R.fail(&t, std::string("[walls] ") + key, "required " + why);
+    if (!needed && t.contains(key)) R.fail(t.get(key), std::string("[walls] ") + key, "not used " + why);
+  };
+  need("height", c.kind != K::plane, std::string("with kind = \"") + name_of(c.kind) + "\"");
+  need("width", c.kind == K::duct, std::string("with kind = \"") + name_of(c.kind) + "\"");
+  need("length", !per, per ? "in a periodic box (the walls span the box along x)" : "in an open domain (the walls' extent along x)");
+  need("depth", !per && c.kind != K::duct,
+       per ? "in a periodic box (the walls span the box along z)"
+       : c.kind == K::duct ? "with kind = \"duct\" (its side walls bound z)"
+                           : "in an open domain (the walls' extent along z)");
+  if (per && c.kind == K::plane)
+    R.fail(t.get("kind"), "[walls] kind", "\"plane\" is for open domains; in a periodic box use \"slit\" (a plane wall repeats as a stack of slits)");
+  c.height = R.number(t, T, "height", 0.0, 0.0, kMaxBoxEdge, true);
+  c.width = R.number(t, T, "width", 0.0, 0.0, kMaxBoxEdge, true);
+  c.length = R.number(t, T, "length", 0.0, 0.0, kMaxBoxEdge);
+  c.depth = R.number(t, T, "depth", 0.0, 0.0, kMaxBoxEdge);
+  c.radius = R.number(t, T, "radius", 1.0, kMinRadius, kMaxRadius);
+  c.gap = R.number(t, T, "gap", c.gap, 0.0, 100.0);
+  c.layers = R.integer(t, T, "layers", 1, 1, 10);
+  c.sections = R.integer(t, T, "sections", 1, 1, 10000);
+}
+
+// Appends the wall particles (fixed) after the interior particles and checks that every interior
+// particle lies in the fluid region. A trajectory of a channel run holds its wall particles last:
+// those equal to the generated ones are dropped from the file's particles first.
+void append_walls(const Reader& R, const toml::table& pt, const toml::table& root, Scene& s, bool from_file) {
+  if (!s.walls.any()) return;
+  const toml::table& wt = *root.get("walls")->as_table();
+  std::vector<Vec3> w;
+  try {
+    w = wall_particles(s.walls, s.domain);
+  } catch (const std::invalid_argument& e) {
+    R.fail(wt.get("kind"), "[walls] kind", e.what());
+  }
+  if (double(w.size()) > double(kMaxCount)) {
+    std::ostringstream o;
+    o << "gives " << w.size() << " wall particles (allowed at most " << kMaxCount << ")";
+    R.fail(wt.get("kind"), "[walls] kind", o.str());
+  }
+  const char* key = pt.contains("positions") ? "positions" : pt.contains("file") ? "file" : "generate";
+  if (from_file || pt.contains("file")) {
+    std::size_t n = s.positions.size();
+    bool same = n >= w.size();
+    for (std::size_t k = 0; same && k < w.size(); ++k) {
+      const std::size_t i = n - w.size() + k;
+      Vec3 d = s.positions[i] - w[k];
+      if (s.domain.periodic()) d = s.domain.minimum_image(d);
+      same = d.norm() <= 1e-9 * (1.0 + w[k].norm()) && std::abs(s.radii[i] - s.walls.radius) <= 1e-12;
+    }
+    if (same) {
+      s.positions.resize(n - w.size());
+      s.radii.resize(n - w.size());
+      s.fixed.resize(n - w.size());
+    }
+  }
+  for (std::size_t i = 0; i < s.positions.size(); ++i)
+    if (!in_channel(s.walls, s.domain, s.positions[i])) {
+      std::ostringstream o;
+      const Vec3& x = s.positions[i];
+      o << "particle " << i << " at [" << x.x() << ", " << x.y() << ", " << x.z() << "] lies outside the fluid region of "
+        << "[walls] kind = \"" << name_of(s.walls.kind) << "\" (centre " << channel_centre(s.domain).transpose()
+        << "; docs/channels.md)";
+      R.fail(pt.get(key), std::string("[particles] ") + key, o.str());
+    }
+  s.wall_count = w.size();
+  for (const Vec3& x : w) {
+    s.positions.push_back(x);
+    s.radii.push_back(s.walls.radius);
+    s.fixed.push_back(1);
   }
 }
 
@@ -620,7 +715,7 @@ Scene parse_scene(const toml::table& root, const std::string& source) {
   Scene s;
   s.source = source;
   Reader R(source, &s.lines);
-  R.only(root, "top level", {"domain", "fluid", "particles", "forces", "flow", "hydrodynamics", "brownian", "time", "output", "run"});
+  R.only(root, "top level", {"domain", "fluid", "walls", "particles", "forces", "flow", "hydrodynamics", "brownian", "time", "output", "run"});
 
   const toml::table& dom = sub(R, root, "domain");
   R.only(dom, "domain", {"kind", "box", "shear_strain"});
@@ -646,6 +741,8 @@ Scene parse_scene(const toml::table& root, const std::string& source) {
   s.fluid.viscosity = R.number(fl, "fluid", "viscosity", 1.0, 0.0, 1e12, true);
   s.fluid.kT = R.number(fl, "fluid", "kT", 0.0, 0.0, 1e12);
 
+  read_walls(R, sub(R, root, "walls"), s);
+
   if (!root.contains("particles")) R.fail(&root, "[particles]", "required table is missing");
   std::optional<Snapshot> from_run;
   read_particles(R, sub(R, root, "particles"), s, dir_of(source), from_run);
@@ -667,6 +764,7 @@ Scene parse_scene(const toml::table& root, const std::string& source) {
     if (from_run->periodic && !dom.contains("shear_strain")) s.domain.shear_strain = from_run->shear_strain;
   }
 
+  append_walls(R, sub(R, root, "particles"), root, s, from_run.has_value());
   check_particles(R, sub(R, root, "particles"), s, dir_of(source));
 
   const toml::table& fo = sub(R, root, "forces");
@@ -675,12 +773,16 @@ Scene parse_scene(const toml::table& root, const std::string& source) {
   s.forces.external_torque = R.vec3_list(fo, "forces", "external_torque");
   for (const auto* key : {"external_force", "external_torque"}) {
     const auto& v = std::string(key) == "external_force" ? s.forces.external_force : s.forces.external_torque;
-    if (v.size() > 1 && v.size() != s.positions.size()) {
+    if (v.size() > 1 && v.size() != s.interior_count()) {
       std::ostringstream o;
-      o << "has " << v.size() << " vectors for " << s.positions.size() << " particles (give 1 or one per particle)";
+      o << "has " << v.size() << " vectors for " << s.interior_count() << " particles (give 1 or one per particle"
+        << (s.wall_count ? "; wall particles take none" : "") << ")";
       R.fail(fo.get(key), std::string("[forces] ") + key, o.str());
     }
   }
+  // Wall particles (last) get no given load: they are held in place, their forces are solved for.
+  for (auto* v : {&s.forces.external_force, &s.forces.external_torque})
+    if (v->size() > 1) v->resize(s.positions.size(), Vec3::Zero());
   // gravity: the force on a sphere of radius 1 a; particle i gets gravity * a_i^3, added to its
   // external_force (the sum is stored per particle, so the resolved scene lists it explicitly).
   if (const toml::node* gn = R.get(fo, "forces", "gravity")) {
@@ -705,8 +807,49 @@ Scene parse_scene(const toml::table& root, const std::string& source) {
   }
 
   const toml::table& flow = sub(R, root, "flow");
-  R.only(flow, "flow", {"kind", "rate", "peclet"});
+  R.only(flow, "flow", {"kind", "rate", "peclet", "mean_velocity", "file", "file_hash"});
   s.flow.kind = R.name(flow, "flow", "kind", FlowParams::Kind::none);
+  if (s.flow.kind == FlowParams::Kind::tabulated) {
+    // A field exported by a fluid solver (io/flow_table.hpp); the resolved scene keeps its path and
+    // hash, so that a resumed or re-run scene refuses a changed file.
+    for (const char* key : {"rate", "peclet", "mean_velocity"})
+      if (flow.contains(key))
+        R.fail(flow.get(key), std::string("[flow] ") + key, "not used with kind = \"tabulated\" (the file gives the flow)");
+    if (!flow.contains("file")) R.fail(&flow, "[flow] file", "required with kind = \"tabulated\"");
+    std::string path = R.string(flow, "flow", "file", "");
+    if (!path.empty() && path[0] != '/') path = dir_of(source) + "/" + path;
+    try {
+      auto grid = std::make_shared<FlowGrid>(read_flow_table(path));
+      grid->path = std::filesystem::absolute(path).lexically_normal().string();
+      s.flow.grid = grid;
+    } catch (const std::exception& e) {
+      R.fail(flow.get("file"), "[flow] file", e.what());
+    }
+    if (flow.contains("file_hash")) {
+      char hex[20];
+      std::snprintf(hex, sizeof hex, "%016llx", (unsigned long long)s.flow.grid->hash);
+      const std::string want = R.string(flow, "flow", "file_hash", "");
+      if (want != hex)
+        R.fail(flow.get("file_hash"), "[flow] file_hash",
+               "the flow table " + s.flow.grid->path + " has changed (hash " + hex + ", the scene recorded " + want +
+                   "); restore the file or start a new run without file_hash");
+    }
+  } else {
+    for (const char* key : {"file", "file_hash"})
+      if (flow.contains(key)) R.fail(flow.get(key), std::string("[flow] ") + key, "only meaningful with kind = \"tabulated\"");
+  }
+  if (s.flow.kind == FlowParams::Kind::poiseuille) {
+    // Pressure-driven flow through the [walls] channel (engine/core/channel.hpp).
+    for (const char* key : {"rate", "peclet"})
+      if (flow.contains(key))
+        R.fail(flow.get(key), std::string("[flow] ") + key, "not used with kind = \"poiseuille\" (give mean_velocity)");
+    if (s.walls.kind != ChannelParams::Kind::slit && s.walls.kind != ChannelParams::Kind::duct)
+      R.fail(flow.get("kind"), "[flow] kind", "\"poiseuille\" flows through a channel: set [walls] kind = \"slit\" or \"duct\"");
+    if (!flow.contains("mean_velocity")) R.fail(&flow, "[flow] mean_velocity", "required with kind = \"poiseuille\"");
+    s.flow.mean_velocity = R.number(flow, "flow", "mean_velocity", 0.0, -1e12, 1e12);
+  } else if (flow.contains("mean_velocity")) {
+    R.fail(flow.get("mean_velocity"), "[flow] mean_velocity", "only meaningful with kind = \"poiseuille\"");
+  }
   s.flow.rate = R.number(flow, "flow", "rate", 0.0, -1e12, 1e12);
   if (flow.contains("peclet")) {
     // Pe = 6 pi mu a^3 rate / kT with a = 1 (docs/rheology.md): the rate follows from Pe and kT.
@@ -719,7 +862,8 @@ Scene parse_scene(const toml::table& root, const std::string& source) {
     s.flow.peclet = R.number(flow, "flow", "peclet", 0.0, -1e12, 1e12);
     s.flow.rate = s.flow.peclet * s.fluid.kT / (6.0 * kPi * s.fluid.viscosity);
   }
-  if (s.flow.kind != FlowParams::Kind::none && !flow.contains("rate") && !flow.contains("peclet"))
+  if (s.flow.kind != FlowParams::Kind::none && s.flow.kind != FlowParams::Kind::poiseuille &&
+      s.flow.kind != FlowParams::Kind::tabulated && !flow.contains("rate") && !flow.contains("peclet"))
     R.fail(&flow, "[flow] rate", "required when kind is not \"none\" (or give peclet)");
 
   const toml::table& hy = sub(R, root, "hydrodynamics");
@@ -855,13 +999,29 @@ std::string resolved_toml(const Scene& s) {
   }
   root.insert("domain", dom);
   root.insert("fluid", toml::table{{"viscosity", s.fluid.viscosity}, {"kT", s.fluid.kT}});
+  // Interior particles only: the wall particles follow from [walls].
+  const std::size_t ni = s.interior_count();
+  auto interior = [&](const std::vector<Vec3>& v) {
+    return v.size() > 1 ? std::vector<Vec3>(v.begin(), v.begin() + long(std::min(ni, v.size()))) : v;
+  };
+  if (s.walls.any()) {
+    toml::table w{{"kind", name_of(s.walls.kind)}, {"radius", s.walls.radius}, {"gap", s.walls.gap},
+                  {"layers", int64_t(s.walls.layers)}, {"sections", int64_t(s.walls.sections)}};
+    if (s.walls.kind != ChannelParams::Kind::plane) w.insert("height", s.walls.height);
+    if (s.walls.kind == ChannelParams::Kind::duct) w.insert("width", s.walls.width);
+    if (!s.domain.periodic()) {
+      w.insert("length", s.walls.length);
+      if (s.walls.kind != ChannelParams::Kind::duct) w.insert("depth", s.walls.depth);
+    }
+    root.insert("walls", w);
+  }
   toml::array radii, fixed;
-  for (double a : s.radii) radii.push_back(a);
-  for (char f : s.fixed) fixed.push_back(bool(f));
-  root.insert("particles", toml::table{{"positions", vec_list(s.positions)}, {"radii", radii}, {"fixed", fixed}});
+  for (std::size_t i = 0; i < ni; ++i) radii.push_back(s.radii[i]);
+  for (std::size_t i = 0; i < ni; ++i) fixed.push_back(bool(s.fixed[i]));
+  root.insert("particles", toml::table{{"positions", vec_list(interior(s.positions))}, {"radii", radii}, {"fixed", fixed}});
   toml::table forces;
-  if (!s.forces.external_force.empty()) forces.insert("external_force", vec_list(s.forces.external_force));
-  if (!s.forces.external_torque.empty()) forces.insert("external_torque", vec_list(s.forces.external_torque));
+  if (!s.forces.external_force.empty()) forces.insert("external_force", vec_list(interior(s.forces.external_force)));
+  if (!s.forces.external_torque.empty()) forces.insert("external_torque", vec_list(interior(s.forces.external_torque)));
   toml::array pair;
   for (const PairForceParams& p : s.forces.pair) {
     toml::table t{{"cutoff", p.cutoff}};
@@ -891,7 +1051,13 @@ std::string resolved_toml(const Scene& s) {
   }
   if (!pair.empty()) forces.insert("pair", pair);
   root.insert("forces", forces);
-  if (s.flow.peclet != 0.0) root.insert("flow", toml::table{{"kind", name_of(s.flow.kind)}, {"peclet", s.flow.peclet}});
+  if (s.flow.kind == FlowParams::Kind::poiseuille) {
+    root.insert("flow", toml::table{{"kind", name_of(s.flow.kind)}, {"mean_velocity", s.flow.mean_velocity}});
+  } else if (s.flow.kind == FlowParams::Kind::tabulated && s.flow.grid) {
+    char hex[20];
+    std::snprintf(hex, sizeof hex, "%016llx", (unsigned long long)s.flow.grid->hash);
+    root.insert("flow", toml::table{{"kind", name_of(s.flow.kind)}, {"file", s.flow.grid->path}, {"file_hash", std::string(hex)}});
+  } else if (s.flow.peclet != 0.0) root.insert("flow", toml::table{{"kind", name_of(s.flow.kind)}, {"peclet", s.flow.peclet}});
   else root.insert("flow", toml::table{{"kind", name_of(s.flow.kind)}, {"rate", s.flow.rate}});
   toml::table hydro{{"model", name_of(s.hydro.model)},
                     {"moments", name_of(s.hydro.moments)},

@@ -568,7 +568,7 @@ TEST_CASE("[brownian] stress_every = \"auto\": the Brownian stress is sampled ev
   CHECK(every("[fluid]\nkT = 1.0\n[particles]\npositions = [[0,0,0],[2.5,0,0]]\n[hydrodynamics]\nmodel = \"stokesian\"\n"
               "moments = \"FTS\"\n[brownian]\nstress_every = 1\n") == 0);
   const std::string why = resolve_model(io::parse_scene(box + "[flow]\nkind = \"simple_shear\"\nrate = 0.1\n", "s.toml")).describe();
-  CHECK(why.find("auto Brownian stress: ambient flow -> sampled every step") != std::string::npos);
+  CHECK(why.find("auto Brownian stress: linear ambient flow -> sampled every step") != std::string::npos);
 }
 
 TEST_CASE("resume compatibility: a stored [brownian] stress_every = 1 equals \"auto\" where auto samples every step or nothing is sampled") {

@@ -52,6 +52,7 @@ std::vector<double> draw_radii(const PlacementParams& p) {
 struct Region {
   bool periodic = false;
   bool sphere = false;
+  ChannelParams channel;  // periodic boxes: the fluid region of these walls (kind none: the whole box)
   Vec3 box = Vec3::Zero();  // periodic box, or edge of the (bounding) cube
   double R = 0.0;           // sphere radius
   Vec3 lo() const { return periodic ? Vec3::Zero() : Vec3(-0.5 * box); }
@@ -71,7 +72,17 @@ struct Region {
   }
   // Largest radius a sphere centred at x may have inside the walls (infinite for periodic boxes).
   double room(const Vec3& x) const {
-    if (periodic) return 1e300;
+    if (periodic) {
+      if (!channel.any()) return 1e300;
+      const Vec3 r = x - 0.5 * box;
+      switch (channel.kind) {
+        case ChannelParams::Kind::plane: return r.y();
+        case ChannelParams::Kind::slit: return 0.5 * channel.height - std::abs(r.y());
+        case ChannelParams::Kind::duct:
+          return std::min(0.5 * channel.height - std::abs(r.y()), 0.5 * channel.width - std::abs(r.z()));
+        default: return 1e300;
+      }
+    }
     if (sphere) return R - x.norm();
     return (0.5 * box - x.cwiseAbs()).minCoeff();
   }
@@ -224,6 +235,12 @@ struct HardSpheres {
 
 void check_fits(const Region& reg, const std::vector<double>& a, double gap) {
   const double amax = *std::max_element(a.begin(), a.end());
+  if (reg.periodic && reg.channel.any() && amax > reg.room(0.5 * reg.box)) {
+    std::ostringstream o;
+    o << "the largest particle (radius " << amax << " a) does not fit in the channel (half-gap "
+      << reg.room(0.5 * reg.box) << " a)";
+    fail(o.str());
+  }
   if (reg.periodic) {
     if (2.0 * amax + gap >= reg.box.minCoeff()) {
       std::ostringstream o;
@@ -346,7 +363,19 @@ double median(std::vector<double> v) {
 
 }  // namespace
 
+double fluid_volume(const ChannelParams& c, const Vec3& box) {
+  switch (c.kind) {
+    case ChannelParams::Kind::slit: return box.x() * c.height * box.z();
+    case ChannelParams::Kind::duct: return box.x() * c.height * c.width;
+    default: return box.prod();
+  }
+}
+
 Placement place_particles(const PlacementParams& p, const Vec3& box_in) {
+  if (p.channel.any() && !(box_in.minCoeff() > 0)) fail("particles are placed in a channel only in a periodic box");
+  if (p.channel.any() && p.pattern == PlacementParams::Pattern::lattice)
+    fail("generate = \"lattice\" fills the whole box; in a channel use generate = \"random\"");
+  if (p.channel.kind == ChannelParams::Kind::plane) fail("particles are placed in a slit or duct, not beside a plane wall");
   if (p.count < 1) fail("count must be >= 1");
   if (!(p.radius > 0)) fail("radius must be > 0");
   if (!(p.min_gap >= 0)) fail("min_gap must be >= 0");
@@ -362,7 +391,8 @@ Placement place_particles(const PlacementParams& p, const Vec3& box_in) {
   double phi = p.volume_fraction;
   if (reg.periodic) {
     reg.box = box_in;
-    phi = vol / box_in.prod();
+    reg.channel = p.channel;
+    phi = vol / fluid_volume(p.channel, box_in);
   } else {
     if (!(phi > 0 && phi < 1)) fail("volume fraction must be in (0, 1)");
     const double V = vol / phi;
@@ -465,7 +495,7 @@ Placement place_particles(const PlacementParams& p, const Vec3& box_in) {
   auto reached = [&] {
     double v = 0;
     for (std::size_t i = 0; i < n; ++i) v += 4.0 / 3.0 * kPi * std::pow(hs.r(i), 3);
-    return v / (reg.periodic ? reg.box.prod() : vol / phi);
+    return v / (reg.periodic ? fluid_volume(reg.channel, reg.box) : vol / phi);
   };
   long below = grow(hs, growth_rate, room_fraction, a_median);
   double last = reached();

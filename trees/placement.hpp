@@ -38,6 +38,8 @@
 // [LS90] Lubachevsky & Stillinger, J. Stat. Phys. 60, 561 (1990).
 #include "engine/core/types.hpp"
 
+#include "engine/core/scene.hpp"
+
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -56,6 +58,10 @@ struct PlacementParams {
   double sigma = 0.2;           // lognormal: standard deviation of ln a
   double min_gap = 1e-3;        // hard-core margin: surface gaps >= min_gap [a]
   long equilibration_sweeps = 100;  // random: Monte Carlo sweeps at the target size (0 = plain RSA)
+  // Periodic boxes only: confine the particles to the fluid region of these walls (every particle
+  // wholly inside it: centre at least a_i from the boundary; engine/core/channel.hpp). The volume
+  // fraction is then relative to the fluid volume.
+  ChannelParams channel;
   std::uint64_t seed = 1;
 };
 
@@ -80,6 +86,9 @@ inline double placement_seconds_estimate(const PlacementParams& p) {
   if (p.pattern == PlacementParams::Pattern::lattice) return 4e-6 * n;
   return n * (2e-6 + 0.21e-6 * double(p.equilibration_sweeps));
 }
+
+// Volume of the fluid region of `c` (slit or duct, or none: the whole box) in the periodic box [a^3].
+double fluid_volume(const ChannelParams& c, const Vec3& box);
 
 // box: the periodic box, or a zero vector for open domains (region centred at the origin).
 // Throws std::invalid_argument with a message on impossible requests.

@@ -2,12 +2,15 @@
 
 #include "engine/app/run.hpp"
 
+#include "engine/core/channel.hpp"
 #include "engine/core/output.hpp"
 #include "engine/observers.hpp"
 #include "engine/pair_forces.hpp"
 #include "engine/resources.hpp"
 #include "lubrication/near_field.hpp"
 #include "trees/neighbor_list.hpp"
+#include "trees/placement.hpp"
+#include "trees/walls.hpp"
 
 #include <omp.h>
 
@@ -160,8 +163,15 @@ StiffnessBound stiffness_bound(const Scene& scene, const ResolvedModel& model) {
   // Stokes drag of the ambient flow's velocity difference across a pair at contact.
   double f_ext = 0.0;
   for (const Vec3& f : scene.forces.external_force) f_ext = std::max(f_ext, f.norm());
-  if (scene.flow.kind != FlowParams::Kind::none)
+  if (scene.flow.kind == FlowParams::Kind::poiseuille) {
+    // The largest shear rate of a channel flow is at its walls: G H / (2 mu) (for a duct, bounded by
+    // that of the slit of the same mean velocity and height times the duct's larger G).
+    const ChannelFlow cf(scene.walls, scene.domain, scene.flow.mean_velocity);
+    f_ext += 6 * kPi * scene.fluid.viscosity * amax * std::abs(cf.pressure_gradient_over_viscosity()) * 0.5 *
+             scene.walls.height * 2 * amax;
+  } else if (scene.flow.kind != FlowParams::Kind::none) {
     f_ext += 6 * kPi * scene.fluid.viscosity * amax * std::abs(scene.flow.rate) * 2 * amax;
+  }
   // Smallest initial gap.
   double h0 = std::numeric_limits<double>::infinity();
   for (const auto& o : initial_overlaps(scene)) h0 = std::min(h0, o.gap);
@@ -293,9 +303,24 @@ int check(Simulation& sim, const CheckOptions& opt, std::FILE* out) {
   const long nfixed = std::count(s.fixed.begin(), s.fixed.end(), 1);
   if (nfixed) std::fprintf(out, ", %ld fixed", nfixed);
   std::fprintf(out, ")\n");
+  if (s.walls.any()) {
+    double vin = 0;
+    for (std::size_t i = 0; i < s.interior_count(); ++i) vin += 4.0 / 3.0 * kPi * std::pow(s.radii[i], 3);
+    std::fprintf(out, "walls: %s, %zu wall particles of radius %.4g a (gap %.4g a, %ld layer%s, thickness %.4g a)",
+                 name_of(s.walls.kind), s.wall_count, s.walls.radius, s.walls.gap, s.walls.layers,
+                 s.walls.layers > 1 ? "s" : "", wall_thickness(s.walls));
+    if (s.walls.kind != ChannelParams::Kind::plane) std::fprintf(out, ", height %.4g a", s.walls.height);
+    if (s.walls.kind == ChannelParams::Kind::duct) std::fprintf(out, ", width %.4g a", s.walls.width);
+    std::fprintf(out, "\n  %zu interior particles", s.interior_count());
+    if (s.domain.periodic() && s.walls.kind != ChannelParams::Kind::plane)
+      std::fprintf(out, ", volume fraction %.4g of the fluid region", vin / fluid_volume(s.walls, s.domain.box));
+    const double area = cross_section_area(s.walls, s.domain);
+    if (area > 0) std::fprintf(out, "; cross-section %.4g a^2 (pressure_drop_particles)", area);
+    std::fprintf(out, "\n");
+  }
   if (s.domain.periodic())
-    std::fprintf(out, "domain: periodic box %.4g x %.4g x %.4g a, volume fraction %.4g\n", s.domain.box.x(),
-                 s.domain.box.y(), s.domain.box.z(), vol / s.domain.box.prod());
+    std::fprintf(out, "domain: periodic box %.4g x %.4g x %.4g a, volume fraction %.4g%s\n", s.domain.box.x(),
+                 s.domain.box.y(), s.domain.box.z(), vol / s.domain.box.prod(), s.walls.any() ? " (walls included)" : "");
   else
     std::fprintf(out, "domain: open\n");
   const IntegratorCost* ic = integrator_cost(model.integrator);
@@ -357,7 +382,19 @@ int check(Simulation& sim, const CheckOptions& opt, std::FILE* out) {
   if (s.flow.kind != FlowParams::Kind::none) {
     char pe[96] = "";
     if (s.flow.peclet != 0.0) std::snprintf(pe, sizeof pe, " (from peclet %.4g = 6 pi mu a^3 rate / kT)", s.flow.peclet);
-    std::fprintf(out, "  ambient flow: %s, rate %.4g /time%s\n", name_of(s.flow.kind), s.flow.rate, pe);
+    if (s.flow.kind == FlowParams::Kind::poiseuille) {
+      const ChannelFlow cf(s.walls, s.domain, s.flow.mean_velocity);
+      std::fprintf(out, "  ambient flow: poiseuille through the %s, mean velocity %.4g a/time, centreline %.4g a/time, "
+                   "-dp/dx = %.4g mu/(a time)\n",
+                   name_of(s.walls.kind), s.flow.mean_velocity, cf.max_velocity(), cf.pressure_gradient_over_viscosity());
+    } else if (s.flow.kind == FlowParams::Kind::tabulated) {
+      const FlowGrid& g = *s.flow.grid;
+      std::fprintf(out, "  ambient flow: tabulated, %s, grid %zu x %zu x %zu nodes over [%.4g, %.4g] x [%.4g, %.4g] x [%.4g, %.4g] a "
+                   "(trilinear; zero outside)\n", g.path.c_str(), g.axis[0].size(), g.axis[1].size(), g.axis[2].size(),
+                   g.axis[0].front(), g.axis[0].back(), g.axis[1].front(), g.axis[1].back(), g.axis[2].front(), g.axis[2].back());
+    } else {
+      std::fprintf(out, "  ambient flow: %s, rate %.4g /time%s\n", name_of(s.flow.kind), s.flow.rate, pe);
+    }
   }
 
   // Outputs.

@@ -7,7 +7,9 @@
 #include "engine/core/types.hpp"
 
 #include <cstdint>
+#include <array>
 #include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -73,9 +75,23 @@ struct ForceParams {
   std::vector<PairForceParams> pair;
 };
 
+// A velocity field on a rectilinear grid (io/flow_table.hpp reads it; engine/core/channel.hpp
+// interpolates it). Node (i, j, k) holds u[(k * ny + j) * nx + i]; NaN marks a node without data.
+struct FlowGrid {
+  std::array<std::vector<double>, 3> axis;  // increasing node coordinates along x, y, z [a]
+  std::vector<Vec3> u;                      // [a/time]
+  std::string path;                         // the file it came from
+  std::uint64_t hash = 0;                   // FNV-1a 64 of the file's bytes
+  std::size_t index(std::size_t i, std::size_t j, std::size_t k) const {
+    return (k * axis[1].size() + j) * axis[0].size() + i;
+  }
+};
+
 struct FlowParams {
-  enum class Kind { none, simple_shear, planar_extension } kind = Kind::none;
+  enum class Kind { none, simple_shear, planar_extension, poiseuille, tabulated } kind = Kind::none;
+  std::shared_ptr<const FlowGrid> grid;  // tabulated: the field
   double rate = 0.0;  // shear or extension rate [1/time]
+  double mean_velocity = 0.0;  // poiseuille: mean velocity U over the channel's cross-section [a/time]
   // Peclet number Pe = 6 pi mu a^3 rate / kT (a = 1, the reference radius; docs/rheology.md), when
   // the scene gave it instead of `rate` (0 = not given); `rate` then holds Pe kT / (6 pi mu).
   double peclet = 0.0;
@@ -83,9 +99,36 @@ struct FlowParams {
 
 template <>
 struct Names<FlowParams::Kind> {
-  static constexpr NameTable<FlowParams::Kind, 3> table{{{FlowParams::Kind::none, "none"},
+  static constexpr NameTable<FlowParams::Kind, 5> table{{{FlowParams::Kind::none, "none"},
                                                          {FlowParams::Kind::simple_shear, "simple_shear"},
-                                                         {FlowParams::Kind::planar_extension, "planar_extension"}}};
+                                                         {FlowParams::Kind::planar_extension, "planar_extension"},
+                                                         {FlowParams::Kind::poiseuille, "poiseuille"},
+                                                         {FlowParams::Kind::tabulated, "tabulated"}}};
+};
+
+// Walls of immobile wall particles bounding a channel (the [walls] table; geometry, placement and
+// the channel flows: engine/core/channel.hpp, trees/walls.hpp, docs/channels.md).
+struct ChannelParams {
+  enum class Kind { none, plane, slit, duct } kind = Kind::none;
+  double height = 0.0;  // H: fluid gap between the walls normal to y [a] (slit, duct)
+  double width = 0.0;   // W: fluid gap between the walls normal to z [a] (duct)
+  double length = 0.0;  // open domains: extent of the walls along x [a]
+  double depth = 0.0;   // open domains, plane and slit: extent of the walls along z [a]
+  double radius = 1.0;  // wall-particle radius r_w [a]
+  double gap = 0.05;    // surface gap between neighbouring wall particles in a layer [a]
+  long sections = 1;   // sections along x of the wall-stress and volume-fraction outputs
+  long layers = 1;      // layers per wall; layer k sits (2 r_w + gap) k / sqrt(2) further out,
+                        // shifted by half a spacing along both wall directions (closing the pores)
+  bool any() const { return kind != Kind::none; }
+  double spacing() const { return 2.0 * radius + gap; }
+};
+
+template <>
+struct Names<ChannelParams::Kind> {
+  static constexpr NameTable<ChannelParams::Kind, 4> table{{{ChannelParams::Kind::none, "none"},
+                                                            {ChannelParams::Kind::plane, "plane"},
+                                                            {ChannelParams::Kind::slit, "slit"},
+                                                            {ChannelParams::Kind::duct, "duct"}}};
 };
 
 // Hydrodynamic level, cheapest first: free draining -> far field -> Stokesian dynamics.
@@ -172,6 +215,10 @@ struct Scene {
   std::vector<Vec3> positions;
   std::vector<double> radii;
   std::vector<char> fixed;
+  // [walls]: its wall particles are the last wall_count entries of positions/radii/fixed (fixed).
+  ChannelParams walls;
+  std::size_t wall_count = 0;
+  std::size_t interior_count() const { return positions.size() - wall_count; }
   ForceParams forces;
   FlowParams flow;
   HydroParams hydro;

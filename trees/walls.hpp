@@ -1,0 +1,27 @@
+#pragma once
+// Wall particles of a channel (the scene's [walls]; geometry in engine/core/channel.hpp).
+//
+// Excluded-volume placement (Lee et al. 2024, fig. 2a): every wall particle lies outside the fluid
+// and the first layer touches the fluid's boundary, so its centres sit r_w outside it. In each wall
+// the centres form a square lattice of spacing s = 2 r_w + gap; layer k (k = 0, 1, ...) lies
+// k s / sqrt(2) further out and is shifted by s/2 along both wall directions, so that neighbouring
+// layers touch (at gap = 0) and close each other's pores.
+//
+// Along a periodic edge of the box the lattice has n = floor(L / s) sites of spacing L / n >= s (a
+// seamless periodic wall); along an open extent e it has floor(e / s) + 1 sites of spacing s
+// centred on the channel. Duct: the walls normal to y span the duct's width plus the side walls'
+// thickness (they cover the corners); the walls normal to z span the height between them.
+#include "engine/core/scene.hpp"
+
+#include <vector>
+
+namespace stokesian {
+
+// Centres of the wall particles (radius c.radius each). Throws std::invalid_argument naming the
+// problem when the walls cannot be built (e.g. a box too small for the channel and its walls).
+std::vector<Vec3> wall_particles(const ChannelParams& c, const Domain& d);
+
+// Thickness of one wall: from the fluid boundary to the outer surface of its last layer [a].
+double wall_thickness(const ChannelParams& c);
+
+}  // namespace stokesian
