@@ -1,0 +1,130 @@
+// Validation (issue 17): a sphere beside walls of wall particles, and the short-time
+// self-diffusivity across a slit (Lee et al. 2024 [L24] figs. 4a and 5; docs/channels.md).
+//
+// Part "mobility" (kind 0). One sphere of radius 1 beside square patches of wall particles (radius 1,
+// one layer, gap 0.05, open domain): one plane wall (patch side 80 a) and a slit of height 32 a
+// (patches 64 a). Far-field constrained mobility problem (FT, octree at tolerance 1e-5); the
+// mobility along x (parallel) and y (perpendicular) in units of 1/(6 pi mu a) against the gap h
+// between the sphere's surface and the walls' boundary plane. References (xi = a/z, z = 1 + h):
+// Faxen's parallel series 1 - 9/16 xi + 1/8 xi^3 - 45/256 xi^4 - 1/16 xi^5 and the leading terms
+// of Brenner's perpendicular series 1 - 9/8 xi + 1/2 xi^3, superposed for two walls.
+//
+// Part "diffusion" (kind 1). Slit of height H = 6 a between one-layer walls in a periodic box
+// 16.4 x 10.05 x 16.4 a (8 x 8 wall sites of spacing 2.05 per wall), interior spheres of radius 1 in
+// equilibrium hard-sphere configurations (random placement with Monte Carlo in the fluid region) at
+// phi = 0.1, 0.25, 0.4 of the fluid volume. Accelerated SD (PME, lubrication), FT, tolerance 1e-4.
+// For every interior particle i and direction d the solve with the unit force e_d on i (all other
+// interior particles force- and torque-free, walls held) gives M_ii,dd; the short-time
+// self-diffusivity is kT M_ii,dd ([L24] eq. 3.2), reported as D/D0 = 6 pi mu a M_ii,dd with
+// D_par = (D_xx + D_zz)/2 and D_perp = D_yy against the centre height y - c_y. [L24] compares with
+// Swan & Brady (2011); we have no table of those values, so the check is the trend [L24] reports:
+// D_perp < D_par throughout at phi >= 0.25, comparable at the centre at phi = 0.1.
+// Rows: kind 0: geometry (0 plane, 1 slit), h, par, perp, par_ref, perp_ref;
+//       kind 1: phi, seed, eta (centre height y - c_y), Dpar, Dperp, N (interior), seconds.
+// Usage: validate_slit [--quick] [--out DIR]; --quick: the slit at h = 3 and 15, and phi = 0.1 with
+// one configuration (a smoke run). Full: about 10 min on 2 cores.
+#include "bench/harness.hpp"
+#include "engine/core/channel.hpp"
+#include "engine/hydrodynamics.hpp"
+#include "engine/model.hpp"
+#include "io/scene_toml.hpp"
+#include "lubrication/near_field.hpp"
+#include "trees/walls.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+using namespace stokesian;
+
+namespace {
+
+double faxen_parallel(double xi) {
+  return 1 - 9.0 / 16 * xi + std::pow(xi, 3) / 8 - 45.0 / 256 * std::pow(xi, 4) - std::pow(xi, 5) / 16;
+}
+double brenner_perpendicular(double xi) { return 1 - 9.0 / 8 * xi + 0.5 * std::pow(xi, 3); }
+
+double mobility(Hydrodynamics& h, const std::vector<Vec3>& walls, const Vec3& x, int d) {
+  std::vector<Vec3> pos = walls;
+  pos.push_back(x);
+  std::vector<double> a(pos.size(), 1.0);
+  std::vector<char> fixed(pos.size(), 1);
+  fixed.back() = 0;
+  std::vector<Vec3> F(pos.size(), Vec3::Zero()), T(pos.size(), Vec3::Zero());
+  F.back()[d] = 6 * kPi;
+  return h.solve(pos, a, fixed, F, T).U.back()[d];
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const bench::Options opt = bench::parse_options(argc, argv);
+  bench::Results res(opt.quick ? "slit_quick" : "slit");
+
+  // Mobility beside walls.
+  {
+    ResolvedModel m;
+    m.level = HydroModel::far_field;
+    m.moments = Moments::FT;
+    m.far_field = "tree";
+    Hydrodynamics h(m, 1.0, AmbientFlow{}, 1e-5);
+    for (int geo = opt.quick ? 1 : 0; geo < 2; ++geo) {
+      ChannelParams c;
+      c.kind = geo == 0 ? ChannelParams::Kind::plane : ChannelParams::Kind::slit;
+      c.height = 32.0;
+      c.length = c.depth = geo == 0 ? 80.0 : 64.0;
+      const std::vector<Vec3> w = wall_particles(c, Domain{});
+      const std::vector<double> gaps = opt.quick ? std::vector<double>{3.0, 15.0}
+                                                 : std::vector<double>{0.1, 0.25, 0.5, 0.75, 1.0, 1.5, 2.0, 3.0, 4.0, 5.0,
+                                                                       6.0, 8.0, 10.0, 12.5, 15.0};
+      for (double gap : gaps) {
+        const double z1 = 1.0 + gap, z2 = geo == 0 ? 1e300 : 32.0 - z1;
+        const Vec3 x(0.0, (geo == 0 ? 0.0 : -16.0) + z1, 0.0);
+        const double par = mobility(h, w, x, 0), perp = mobility(h, w, x, 1);
+        const double par_ref = faxen_parallel(1 / z1) + faxen_parallel(1 / z2) - 1;
+        const double perp_ref = brenner_perpendicular(1 / z1) + brenner_perpendicular(1 / z2) - 1;
+        std::printf("%s h %5.2f: parallel %.4f (series %.4f, %+.1f %%), perpendicular %.4f (series %.4f, %+.1f %%)\n",
+                    geo == 0 ? "plane" : "slit ", gap, par, par_ref, 100 * (par / par_ref - 1), perp, perp_ref,
+                    100 * (perp / perp_ref - 1));
+        res.add({{"kind", 0}, {"geometry", geo}, {"h", gap}, {"walls", double(w.size())}},
+                {{"par", par}, {"perp", perp}, {"par_ref", par_ref}, {"perp_ref", perp_ref}});
+      }
+    }
+  }
+
+  // Self-diffusivity across a 6 a slit.
+  const std::vector<double> phis = opt.quick ? std::vector<double>{0.1} : std::vector<double>{0.1, 0.25, 0.4};
+  const int seeds = opt.quick ? 1 : 3;
+  for (double phi : phis)
+    for (int seed = 1; seed <= seeds; ++seed) {
+      std::ostringstream scene;
+      scene << "[domain]\nkind = \"periodic\"\nbox = [16.4, 10.05, 16.4]\n[walls]\nkind = \"slit\"\nheight = 6.0\n"
+            << "[particles]\ngenerate = \"random\"\nvolume_fraction = " << phi << "\nseed = " << seed
+            << "\n[hydrodynamics]\nmodel = \"stokesian\"\nsolver = \"accelerated\"\nmoments = \"FT\"\ntolerance = 1e-4\n";
+      const Scene s = io::parse_scene(scene.str(), "slit_diffusion.toml");
+      const ResolvedModel m = resolve_model(s);
+      Hydrodynamics h(m, 1.0, AmbientFlow{}, s.hydro.tolerance, lubrication::near_field_params(s.hydro, m.moments), 1.0);
+      const Configuration conf{s.positions, s.radii, s.domain};
+      const std::size_t n = s.positions.size(), ni = s.interior_count();
+      const auto t0 = std::chrono::steady_clock::now();
+      h.prepare(conf);
+      const std::vector<Vec3> zero(n, Vec3::Zero());
+      for (std::size_t i = 0; i < ni; ++i) {
+        double D[3];
+        for (int d = 0; d < 3; ++d) {
+          std::vector<Vec3> F = zero;
+          F[i][d] = 6 * kPi;
+          D[d] = h.solve(conf, s.fixed, F, zero).U[i][d];
+        }
+        res.add({{"kind", 1}, {"phi", phi}, {"seed", double(seed)}, {"eta", s.positions[i].y() - 0.5 * 10.05},
+                 {"N", double(ni)}},
+                {{"Dpar", 0.5 * (D[0] + D[2])}, {"Dperp", D[1]}});
+      }
+      const double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      std::printf("diffusion phi %.2f seed %d: %zu interior spheres, %zu wall particles, %.1f s\n", phi, seed, ni,
+                  s.wall_count, sec);
+      res.add({{"kind", 2}, {"phi", phi}, {"seed", double(seed)}, {"N", double(ni)}}, {{"seconds", sec}});
+    }
+  std::printf("wrote %s\n", res.write(opt.out).c_str());
+  return 0;
+}
