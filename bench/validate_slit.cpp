@@ -3,8 +3,9 @@
 //
 // Part "mobility" (kind 0). One sphere of radius 1 beside square patches of wall particles (radius 1,
 // one layer, gap 0.05, open domain): one plane wall (patch side 80 a) and a slit of height 32 a
-// (patches 64 a). Far-field constrained mobility problem (FT, octree at tolerance 1e-5); the
-// mobility along x (parallel) and y (perpendicular) in units of 1/(6 pi mu a) against the gap h
+// (patches 64 a). Constrained Stokesian dynamics as [L24] fig. 4a (accelerated SD, FT, octree far
+// field, tolerance 1e-4, lubrication below the published cutoff 2r/(a_i+a_j) = 4, i.e. gaps < 2 a);
+// the mobility along x (parallel) and y (perpendicular) in units of 1/(6 pi mu a) against the gap h
 // between the sphere's surface and the walls' boundary plane. References (xi = a/z, z = 1 + h):
 // Faxen's parallel series 1 - 9/16 xi + 1/8 xi^3 - 45/256 xi^4 - 1/16 xi^5 and the leading terms
 // of Brenner's perpendicular series 1 - 9/8 xi + 1/2 xi^3, superposed for two walls.
@@ -64,10 +65,11 @@ int main(int argc, char** argv) {
   // Mobility beside walls.
   {
     ResolvedModel m;
-    m.level = HydroModel::far_field;
+    m.level = HydroModel::stokesian;
+    m.solver = "accelerated_sd";
     m.moments = Moments::FT;
     m.far_field = "tree";
-    Hydrodynamics h(m, 1.0, AmbientFlow{}, 1e-5);
+    Hydrodynamics h(m, 1.0, AmbientFlow{}, 1e-4, lubrication::near_field_params(HydroParams{}, Moments::FT), 1.0);
     for (int geo = opt.quick ? 1 : 0; geo < 2; ++geo) {
       ChannelParams c;
       c.kind = geo == 0 ? ChannelParams::Kind::plane : ChannelParams::Kind::slit;

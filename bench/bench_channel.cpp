@@ -1,0 +1,84 @@
+// Benchmark (issue 17): wall time per Brownian SD step of constrained Stokesian dynamics against
+// the number of particles N = N_I + N_W, with interior fractions N_I/N = 1, 0.1, 0.01 (Lee et al.
+// 2024 [L24] fig. 6; docs/channels.md).
+//
+// Scene (as [L24] fig. 6): a random hard-sphere dispersion at phi = 0.2 in a periodic box, radius 1,
+// Brownian (kT = 1) in simple shear at Pe = 6 pi mu a^3 rate / kT = 1 (Lees-Edwards), no pair force
+// but a Hertz backstop; the first N - N_I particles (in the generator's order, spread through the
+// box) are held fixed, as [L24]'s "fraction of particles held at zero velocity". Model: Stokesian
+// dynamics, FT, tolerance 1e-3, the Fixman integrator (two solves, near- and far-field noise),
+// solver dense (N <= 500) and accelerated (all N), PME far field. One step = evaluate at x0 (what
+// Simulation::run does) + advance; the first step (set-up) is not timed, then `steps` steps are
+// averaged.
+// Rows: solver (0 dense, 1 accelerated), N, fraction, N_I, threads; phases: seconds (per step).
+// The plot script fits exponents per solver and fraction and the speed-up from the constraint
+// (time at fraction 1 over time at fraction f, same N).
+// Usage: bench_channel [--quick] [--out DIR]; full: N = 100 ... 3000 (dense to 500), 3 steps;
+// --quick: N = 100, 300, 1 step.
+#include "bench/harness.hpp"
+#include "engine/simulation.hpp"
+#include "io/scene_toml.hpp"
+
+#include <omp.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+using namespace stokesian;
+
+namespace {
+
+Scene make_scene(long n, double fraction, const std::string& solver) {
+  const double L = std::cbrt(double(n) * 4.0 / 3.0 * kPi / 0.2);
+  std::ostringstream o;
+  o.precision(10);
+  o << "[domain]\nkind = \"periodic\"\nbox = [" << L << ", " << L << ", " << L << "]\n"
+    << "[fluid]\nkT = 1.0\n[particles]\ngenerate = \"random\"\ncount = " << n << "\nseed = 5\n"
+    << "[[forces.pair]]\nkind = \"hertz\"\nstiffness = 20000.0\n"
+    << "[flow]\nkind = \"simple_shear\"\npeclet = 1.0\n"
+    << "[hydrodynamics]\nmodel = \"stokesian\"\nsolver = \"" << solver << "\"\nmoments = \"FT\"\ntolerance = 1e-3\n"
+    << "[brownian]\nstress_every = 0\n[time]\ndt = 1e-4\nsteps = 100\n";
+  Scene s = io::parse_scene(o.str(), "bench_channel.toml");
+  const long interior = std::max(1L, std::lround(fraction * double(n)));
+  for (long i = 0; i < n - interior; ++i) s.fixed[std::size_t(i)] = 1;
+  return s;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const bench::Options opt = bench::parse_options(argc, argv);
+  bench::Results res(opt.quick ? "channel_quick" : "channel");
+  const std::vector<long> sizes = opt.quick ? std::vector<long>{100, 300} : std::vector<long>{100, 300, 1000, 3000};
+  const int steps = opt.quick ? 1 : 3;
+  for (const char* solver : {"dense", "accelerated"})
+    for (long n : sizes) {
+      if (std::string(solver) == "dense" && n > 500) continue;
+      for (double f : {1.0, 0.1, 0.01}) {
+        const Scene scene = make_scene(n, f, solver);
+        Simulation sim(scene);
+        State s = sim.initial_state();
+        {
+          const Evaluation ev = sim.evaluate(s, s.position);
+          sim.advance(s, ev);
+        }
+        const auto t0 = std::chrono::steady_clock::now();
+        for (int k = 0; k < steps; ++k) {
+          const Evaluation ev = sim.evaluate(s, s.position);
+          sim.advance(s, ev);
+        }
+        const double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / steps;
+        long ni = 0;
+        for (char c : scene.fixed) ni += c == 0;
+        std::printf("%-11s N %5ld  interior fraction %.2f (N_I %5ld): %.4f s per step\n", solver, n, f, ni, sec);
+        std::fflush(stdout);
+        res.add({{"solver", std::string(solver) == "dense" ? 0.0 : 1.0}, {"N", double(n)}, {"fraction", f},
+                 {"N_I", double(ni)}, {"threads", double(omp_get_max_threads())}},
+                {{"seconds", sec}});
+      }
+    }
+  std::printf("wrote %s\n", res.write(opt.out).c_str());
+  return 0;
+}

@@ -1,0 +1,65 @@
+#!/usr/bin/python3
+"""Chart the constrained-SD cost benchmark (bench/bench_channel.cpp, issue 17; Lee et al. 2024
+fig. 6): (a) wall time per Brownian SD step against N for the dense and the accelerated solver at
+interior fractions 1, 0.1, 0.01, with the exponent of a least-squares fit of log t against log N;
+(b) the speed-up from the constraint, t(fraction 1) / t(fraction f) at the same N. Prints the table
+of docs/channels.md.
+
+usage: plot_channel.py [RESULTS.json] [OUT.png]   (default bench/results/channel.json)
+"""
+import json
+import sys
+
+import matplotlib
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+
+src = sys.argv[1] if len(sys.argv) > 1 else "bench/results/channel.json"
+out = sys.argv[2] if len(sys.argv) > 2 else src.replace(".json", ".png")
+rows = json.load(open(src))["rows"]
+names = {0: "dense SD", 1: "accelerated SD"}
+fracs = sorted({r["params"]["fraction"] for r in rows}, reverse=True)
+
+fig, ax = plt.subplots(1, 2, figsize=(12, 4.8))
+table = {}
+for s, marker, ls in ((0, "s", "--"), (1, "o", "-")):
+    for k, f in enumerate(fracs):
+        pts = sorted([r for r in rows if r["params"]["solver"] == s and r["params"]["fraction"] == f],
+                     key=lambda r: r["params"]["N"])
+        if not pts:
+            continue
+        n = np.array([r["params"]["N"] for r in pts])
+        t = np.array([r["phases"]["seconds"] for r in pts])
+        for r in pts:
+            table[(s, f, int(r["params"]["N"]))] = r["phases"]["seconds"]
+        slope = np.polyfit(np.log(n), np.log(t), 1)[0] if len(n) > 1 else float("nan")
+        print(f"{names[s]}, interior fraction {f:g}: exponent {slope:.2f} over N = {int(n.min())}..{int(n.max())}")
+        ax[0].loglog(n, t, marker=marker, ls=ls, color=f"C{k}",
+                     label=f"{names[s]}, N_I/N = {f:g} (slope {slope:.2f})")
+ax[0].set_xlabel("N = N_I + N_W")
+ax[0].set_ylabel("wall time per Brownian step [s]")
+ax[0].set_title("(a) constrained SD, φ = 0.2, Pe = 1, FT, tol 1e-3")
+ax[0].legend(fontsize=8)
+ax[0].grid(alpha=0.3, which="both")
+
+print("solver, N, t(1) s, speed-up at 0.1, at 0.01")
+for s, marker, ls in ((0, "s", "--"), (1, "o", "-")):
+    for k, f in enumerate(fracs[1:], start=1):
+        ns = sorted({N for (ss, ff, N) in table if ss == s and ff == f and (s, 1.0, N) in table})
+        if not ns:
+            continue
+        ax[1].semilogx(ns, [table[(s, 1.0, N)] / table[(s, f, N)] for N in ns], marker=marker, ls=ls, color=f"C{k}",
+                       label=f"{names[s]}, N_I/N = {f:g}")
+    for N in sorted({N for (ss, ff, N) in table if ss == s and ff == 1.0}):
+        sp = [table[(s, 1.0, N)] / table[(s, f, N)] if (s, f, N) in table else float("nan") for f in fracs[1:]]
+        print(f"  {names[s]:15s} {N:6d} {table[(s, 1.0, N)]:.3g} " + " ".join(f"{v:.2f}" for v in sp))
+ax[1].axhline(1.0, color="0.6", lw=0.8)
+ax[1].set_xlabel("N")
+ax[1].set_ylabel("t(N_I/N = 1) / t(N_I/N)")
+ax[1].set_title("(b) speed-up from the constraint")
+ax[1].legend(fontsize=8)
+ax[1].grid(alpha=0.3, which="both")
+fig.tight_layout()
+fig.savefig(out, dpi=110)
+print("wrote", out)
