@@ -167,6 +167,44 @@ TEST_CASE("wall particles: excluded-volume placement, seamless periodic walls, l
   CHECK_THROWS_WITH_AS(wall_particles(too_tall, d), doctest::Contains("Ly = 20"), std::invalid_argument);
 }
 
+TEST_CASE("duct walls: no overlaps, closed corners") {
+  // Every point of the duct's boundary lies within sqrt(2 (s'/2)^2 + r^2) of a wall-particle centre,
+  // the farthest a point of a plane touching a square lattice of spacing s' can be (above a cell's
+  // middle), s' the spacing stretched by at most 10 % here; a hole at a corner would leave boundary
+  // points farther away.
+  Domain d;
+  d.kind = Domain::Kind::periodic;
+  d.box = Vec3(8.2, 14.0, 14.0);
+  for (long layers : {1L, 2L}) {
+    ChannelParams c;
+    c.kind = ChannelParams::Kind::duct;
+    c.height = 6.2;
+    c.width = 6.2;
+    c.layers = layers;
+    const std::vector<Vec3> w = wall_particles(c, d);
+    const double s = 1.1 * c.spacing(), bound = std::sqrt(0.5 * s * s + 1.0) + 1e-9;
+    double closest = 1e300, worst = 0;
+    for (std::size_t i = 0; i < w.size(); ++i) {
+      CHECK_FALSE(in_channel(c, d, w[i]));
+      for (std::size_t j = i + 1; j < w.size(); ++j) closest = std::min(closest, d.minimum_image(w[i] - w[j]).norm());
+    }
+    for (int k = 0; k <= 400; ++k) {
+      const double t = k / 400.0;
+      for (const Vec3& p : {Vec3(0, -3.1 + 6.2 * t, 3.1), Vec3(0, -3.1 + 6.2 * t, -3.1), Vec3(0, 3.1, -3.1 + 6.2 * t),
+                            Vec3(0, -3.1, -3.1 + 6.2 * t)})
+        for (double x : {0.0, 0.5 * c.spacing(), 1.0}) {
+          double best = 1e300;
+          for (const Vec3& q : w) best = std::min(best, d.minimum_image(p + Vec3(x + 4.1, 7.0, 7.0) - q).norm());
+          worst = std::max(worst, best);
+        }
+    }
+    MESSAGE("duct, " << layers << " layer(s): " << w.size() << " wall particles, closest pair " << closest
+                     << ", farthest boundary point from a centre " << worst << " (bound " << bound << ")");
+    CHECK(closest >= 2.0 + 0.5 * c.gap - 1e-9);
+    CHECK(worst <= bound);
+  }
+}
+
 TEST_CASE("channel scenes: walls appended and listed by [walls], interior checked, errors name the key") {
   const std::string base = R"(
 [domain]

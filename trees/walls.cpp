@@ -13,7 +13,7 @@ namespace {
 // Lattice coordinates along one wall direction: periodic edge L (sites k L/n, n = floor(L/s),
 // shifted by `shift` of a spacing) or open extent e centred on `mid` (floor(e/s) + 1 sites).
 std::vector<double> line_sites(bool periodic, double L, double extent, double mid, double s, double shift,
-                               const char* what) {
+                               const char* what, bool stretch = false, double radius = 0.0) {
   std::vector<double> v;
   if (periodic) {
     const long n = long(std::floor(L / s + 1e-9));
@@ -25,7 +25,16 @@ std::vector<double> line_sites(bool periodic, double L, double extent, double mi
     const double h = L / double(n);
     for (long k = 0; k < n; ++k) v.push_back((double(k) + shift) * h);
   } else {
-    const long n = long(std::floor(extent / s + 1e-9)) + 1;
+    long n = long(std::floor(extent / s + 1e-9)) + 1;
+    // stretch: the end sites sit exactly at mid -+ extent/2, spacing extent/(n-1): the tighter count
+    // ceil(extent/s) + 1 while it keeps a surface gap of at least gap/2, else floor(extent/s) + 1
+    // (spacing between s and 2 s).
+    if (stretch) {
+      const double r2 = 2.0 * radius, gap = s - r2;
+      const long tight = long(std::ceil(extent / s - 1e-9)) + 1;
+      if (tight > 1 && extent / double(tight - 1) >= r2 + 0.5 * gap - 1e-12) n = tight;
+      if (n > 1) s = extent / double(n - 1);
+    }
     const double first = mid - 0.5 * double(n - 1) * s;
     // A shifted layer takes the n - 1 midpoints (symmetric about the centre).
     for (long k = 0; k < (shift > 0 ? n - 1 : n); ++k) v.push_back(first + (double(k) + shift) * s);
@@ -65,13 +74,13 @@ std::vector<Vec3> wall_particles(const ChannelParams& c, const Domain& d) {
   }
   // One wall: normal axis `nax` (1 = y, 2 = z), side +-1, boundary at ctr[nax] + side * half;
   // in-plane axes x and `tax`; along tax either the periodic edge or the extent `ext` about ctr.
-  auto wall = [&](int nax, double side, double half, int tax, bool tax_periodic, double ext) {
+  auto wall = [&](int nax, double side, double half, int tax, bool tax_periodic, double ext, bool stretch = false) {
     for (long k = 0; k < c.layers; ++k) {
       const double shift = (k % 2) ? 0.5 : 0.0;
       const double pos = ctr[nax] + side * (half + r + double(k) * dn);
       const std::vector<double> xs = line_sites(per, d.box.x(), c.length, ctr.x(), s, shift, "flow direction (x)");
       const std::vector<double> ts =
-          line_sites(tax_periodic, d.box[tax], ext, ctr[tax], s, shift, tax == 2 ? "span (z)" : "span (y)");
+          line_sites(tax_periodic, d.box[tax], ext, ctr[tax], s, shift, tax == 2 ? "span (z)" : "span (y)", stretch, r);
       for (double x : xs)
         for (double t : ts) {
           Vec3 p;
@@ -89,16 +98,15 @@ std::vector<Vec3> wall_particles(const ChannelParams& c, const Domain& d) {
       wall(1, +1.0, 0.5 * c.height, 2, per, c.depth);
       break;
     case ChannelParams::Kind::duct: {
-      // Walls normal to y cover the width and the side walls' thickness (open along z); the side
-      // walls cover the height between them.
+      // Walls normal to y reach across the width to the side walls' outer layer (their end sites sit
+      // in the side walls' planes: the corners are closed); the side walls span the height between
+      // them, their end sites `gap` from the corner sites.
       const double span_z = c.width + 2.0 * T - 2.0 * r;
-      wall(1, -1.0, 0.5 * c.height, 2, false, span_z);
-      wall(1, +1.0, 0.5 * c.height, 2, false, span_z);
-      // Side walls: sites along y within the fluid height only (strictly inside, the corners are
-      // covered above).
-      const double span_y = std::max(0.0, c.height - 2.0 * r);
-      wall(2, -1.0, 0.5 * c.width, 1, false, span_y);
-      wall(2, +1.0, 0.5 * c.width, 1, false, span_y);
+      wall(1, -1.0, 0.5 * c.height, 2, false, span_z, true);
+      wall(1, +1.0, 0.5 * c.height, 2, false, span_z, true);
+      const double span_y = std::max(0.0, c.height - 2.0 * r - 2.0 * c.gap);
+      wall(2, -1.0, 0.5 * c.width, 1, false, span_y, true);
+      wall(2, +1.0, 0.5 * c.width, 1, false, span_y, true);
       break;
     }
     case ChannelParams::Kind::none: break;

@@ -10,7 +10,11 @@
 // Along a periodic edge of the box the lattice has n = floor(L / s) sites of spacing L / n >= s (a
 // seamless periodic wall); along an open extent e it has floor(e / s) + 1 sites of spacing s
 // centred on the channel. Duct: the walls normal to y span the duct's width plus the side walls'
-// thickness (they cover the corners); the walls normal to z span the height between them.
+// thickness, their end sites in the side walls' planes (closing the corners); the walls normal to z
+// span the height between them, their end sites `gap` from the corner sites. Along these open spans
+// the end sites sit at the ends: n = ceil(extent/s) + 1 sites when their spacing extent/(n-1) keeps
+// a surface gap of at least gap/2, else floor(extent/s) + 1 (spacing between s and 2 s: choose H and
+// W so that H - 2 r - 2 gap and W + 2 thickness - 2 r are multiples of s for a uniform wall).
 #include "engine/core/scene.hpp"
 
 #include <vector>
