@@ -79,7 +79,7 @@ for k, phi in enumerate(phis):
     a.errorbar(cen, mn, yerr=sn, fmt="s--", color=c, mfc="white", label=f"D⊥, φ = {phi:g}")
 a.set_xlabel("|y − c_y| / a (0: slit centre; 2: touching a wall)")
 a.set_ylabel("D / D0")
-a.set_title("(c) self-diffusivity across a 6 a slit (accelerated SD, FT)")
+a.set_title("(c) self-diffusivity across a 6 a slit (accelerated SD, FTS)")
 a.legend(fontsize=8, ncol=2)
 a.grid(alpha=0.3)
 fig.tight_layout()

@@ -13,7 +13,8 @@
 // Part "diffusion" (kind 1). Slit of height H = 6 a between one-layer walls in a periodic box
 // 16.4 x 10.05 x 16.4 a (8 x 8 wall sites of spacing 2.05 per wall), interior spheres of radius 1 in
 // equilibrium hard-sphere configurations (random placement with Monte Carlo in the fluid region) at
-// phi = 0.1, 0.25, 0.4 of the fluid volume. Accelerated SD (PME, lubrication), FT, tolerance 1e-4.
+// phi = 0.1, 0.25, 0.4 of the fluid volume. Accelerated SD (PME, lubrication), FTS (rigid spheres:
+// the stresslets are solved for, as for the bulk D_s0 of validate_diffusion), tolerance 1e-4.
 // For every interior particle i and direction d the solve with the unit force e_d on i (all other
 // interior particles force- and torque-free, walls held) gives M_ii,dd; the short-time
 // self-diffusivity is kT M_ii,dd ([L24] eq. 3.2), reported as D/D0 = 6 pi mu a M_ii,dd with
@@ -102,7 +103,7 @@ int main(int argc, char** argv) {
       std::ostringstream scene;
       scene << "[domain]\nkind = \"periodic\"\nbox = [16.4, 10.05, 16.4]\n[walls]\nkind = \"slit\"\nheight = 6.0\n"
             << "[particles]\ngenerate = \"random\"\nvolume_fraction = " << phi << "\nseed = " << seed
-            << "\n[hydrodynamics]\nmodel = \"stokesian\"\nsolver = \"accelerated\"\nmoments = \"FT\"\ntolerance = 1e-4\n";
+            << "\n[hydrodynamics]\nmodel = \"stokesian\"\nsolver = \"accelerated\"\nmoments = \"FTS\"\ntolerance = 1e-4\n";
       const Scene s = io::parse_scene(scene.str(), "slit_diffusion.toml");
       const ResolvedModel m = resolve_model(s);
       Hydrodynamics h(m, 1.0, AmbientFlow{}, s.hydro.tolerance, lubrication::near_field_params(s.hydro, m.moments), 1.0);
