@@ -2,8 +2,9 @@
 """Write the pressure-driven flow through a rectangular duct as a fluid solver's grid export
 (x, y, z, u, v, w per line), the input of [flow] kind = "tabulated" (docs/channels.md). It stands in
 for a COMSOL/OpenFOAM/FEniCS export in configs/duct_tabulated.toml. Series: White, Viscous Fluid
-Flow, eq. 3-48 (the same closed form as engine/core/channel.hpp), duct |y - cy| < H/2, |z - cz| < W/2,
-mean velocity U, nodes every h along y and z and at x = 0 and Lx; NaN outside the fluid (no data).
+Flow (3rd ed. 2006), the rectangular duct (the same closed form as engine/core/channel.hpp); duct
+|y - cy| < H/2, |z - cz| < W/2, mean velocity U, nodes every h along y and z from wall to wall
+(u = 0 on the walls) at x = 0 and Lx.
 
 usage: write_duct_table.py OUT.csv H W U h Lx cy cz
 """

@@ -14,8 +14,8 @@
 // Pressure-driven flows, u = (u(eta, zeta), 0, 0), zero outside the fluid (so excluded-volume wall
 // particles, whose centres lie outside, see no ambient flow: [L24] needs U, Omega, E = 0 there):
 //   plane Poiseuille (slit): u = (3/2) U (1 - (2 eta / H)^2), U the mean velocity.
-//   rectangular duct, a = H/2, b = W/2, G/mu = -(dp/dx)/mu (White, Viscous Fluid Flow, eq. 3-48;
-//   Shah & London 1978 for the check values in tests/test_channel.cpp):
+//   rectangular duct, a = H/2, b = W/2, G/mu = -(dp/dx)/mu (White, Viscous Fluid Flow, 3rd ed.
+//   2006, the rectangular duct; Shah & London 1978 for the check values in tests/test_channel.cpp):
 //     u = (G/2mu)(a^2 - eta^2) - (16 a^2 G / (mu pi^3)) sum_{n odd} (-1)^((n-1)/2) n^-3
 //           cosh(n pi zeta / 2a) / cosh(n pi b / 2a) cos(n pi eta / 2a)
 //     U = (G a^2 / 3mu) [1 - (192 a / (pi^5 b)) sum_{n odd} n^-5 tanh(n pi b / 2a)]
