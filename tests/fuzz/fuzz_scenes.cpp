@@ -212,7 +212,18 @@ std::vector<Base> load_bases(const std::string& configs) {
     std::ifstream in(p);
     std::stringstream ss;
     ss << in.rdbuf();
-    bases.push_back({p.stem().string(), parse_simple(ss.str())});
+    Model m = parse_simple(ss.str());
+    // Files a config names relative to its folder (a flow table) are named absolutely: the cases
+    // run from their own folders.
+    for (const char* table : {"flow", "particles"}) {
+      const std::string v = m.get(table, "file");
+      const std::size_t q0 = v.find('"'), q1 = q0 == std::string::npos ? q0 : v.find('"', q0 + 1);
+      if (q1 == std::string::npos) continue;
+      const std::string rel = v.substr(q0 + 1, q1 - q0 - 1);
+      if (!rel.empty() && rel[0] != '/')
+        m.table(table).set("file", "\"" + (p.parent_path() / rel).lexically_normal().string() + "\"");
+    }
+    bases.push_back({p.stem().string(), m});
   }
   // Minimal scenes (fast to solve).
   bases.push_back({"min_two", parse_simple("[particles]\npositions = [[0.0, 0.0, 0.0], [3.0, 0.0, 0.0]]\n"
