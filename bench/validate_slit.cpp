@@ -31,6 +31,7 @@
 #include "engine/model.hpp"
 #include "io/scene_toml.hpp"
 #include "lubrication/near_field.hpp"
+#include "tests/support/wall_mobility.hpp"
 #include "trees/walls.hpp"
 
 #include <cmath>
@@ -39,22 +40,13 @@
 
 using namespace stokesian;
 
+using test_support::brenner_perpendicular;
+using test_support::faxen_parallel;
+
 namespace {
 
-double faxen_parallel(double xi) {
-  return 1 - 9.0 / 16 * xi + std::pow(xi, 3) / 8 - 45.0 / 256 * std::pow(xi, 4) - std::pow(xi, 5) / 16;
-}
-double brenner_perpendicular(double xi) { return 1 - 9.0 / 8 * xi + 0.5 * std::pow(xi, 3); }
-
 double mobility(Hydrodynamics& h, const std::vector<Vec3>& walls, const Vec3& x, int d) {
-  std::vector<Vec3> pos = walls;
-  pos.push_back(x);
-  std::vector<double> a(pos.size(), 1.0);
-  std::vector<char> fixed(pos.size(), 1);
-  fixed.back() = 0;
-  std::vector<Vec3> F(pos.size(), Vec3::Zero()), T(pos.size(), Vec3::Zero());
-  F.back()[d] = 6 * kPi;
-  return h.solve(pos, a, fixed, F, T).U.back()[d];
+  return test_support::sphere_among_walls(h, walls, x, d).U.back()[d];
 }
 
 }  // namespace

@@ -19,6 +19,7 @@
 #include "engine/hydrodynamics.hpp"
 #include "io/flow_table.hpp"
 #include "io/scene_toml.hpp"
+#include "tests/support/wall_mobility.hpp"
 #include "trees/walls.hpp"
 
 #include <cmath>
@@ -28,6 +29,8 @@
 
 using namespace stokesian;
 using stokesian::io::parse_scene;
+using stokesian::test_support::brenner_perpendicular;
+using stokesian::test_support::faxen_parallel;
 
 namespace {
 // Scratch files of this suite, in the system's temporary folder.
@@ -53,11 +56,6 @@ Domain periodic_box(const Vec3& box) {
   return d;
 }
 
-double faxen_parallel(double xi) {
-  return 1 - 9.0 / 16 * xi + std::pow(xi, 3) / 8 - 45.0 / 256 * std::pow(xi, 4) - std::pow(xi, 5) / 16;
-}
-double brenner_perpendicular(double xi) { return 1 - 9.0 / 8 * xi + 0.5 * std::pow(xi, 3); }
-
 ResolvedModel far_field_model(Moments m) {
   ResolvedModel r;
   r.level = HydroModel::far_field;
@@ -66,18 +64,10 @@ ResolvedModel far_field_model(Moments m) {
   return r;
 }
 
-// Mobility of one sphere (radius 1) at centre x among fixed wall particles, along axis d, in units
-// of 1/(6 pi mu a): the far-field constrained mobility problem (walls held, their forces unknown).
+// Mobility of one sphere among the held wall particles (tests/support/wall_mobility.hpp).
 double sphere_mobility(Hydrodynamics& h, const std::vector<Vec3>& walls, const Vec3& x, int d) {
-  std::vector<Vec3> pos = walls;
-  pos.push_back(x);
-  std::vector<double> a(pos.size(), 1.0);
-  std::vector<char> fixed(pos.size(), 1);
-  fixed.back() = 0;
-  std::vector<Vec3> F(pos.size(), Vec3::Zero()), T(pos.size(), Vec3::Zero());
-  F.back()[d] = 6 * kPi;
-  const HydroResult r = h.solve(pos, a, fixed, F, T);
-  for (std::size_t i = 0; i + 1 < pos.size(); ++i) REQUIRE(r.U[i].norm() == 0.0);  // walls held
+  const HydroResult r = test_support::sphere_among_walls(h, walls, x, d);
+  for (std::size_t i = 0; i + 1 < r.U.size(); ++i) REQUIRE(r.U[i].norm() == 0.0);  // walls held
   return r.U.back()[d];
 }
 
