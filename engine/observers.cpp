@@ -1,6 +1,7 @@
 #include "engine/observers.hpp"
 
 #include "engine/core/channel.hpp"
+#include "engine/core/outline.hpp"
 #include "engine/core/errors.hpp"
 #include "engine/core/flow.hpp"
 #include "engine/core/sym_traceless.hpp"
@@ -174,8 +175,68 @@ class ChannelOutputs final : public Observer {
     x0_ = d_.periodic() ? 0.0 : -0.5 * c_.length;
     len_ = d_.periodic() ? d_.box.x() : c_.length;
     nw_ = c_.kind == ChannelParams::Kind::duct ? 4 : c_.kind == ChannelParams::Kind::slit ? 2 : 1;
+    if (c_.kind == ChannelParams::Kind::outline) {
+      o_ = make_outline(c_);
+      for (std::size_t k = 0; k < o_.edges(); ++k)
+        if (!o_.open[k]) wall_edge_.push_back(k);
+      nw_ = int(wall_edge_.size());
+      double lo = o_.v[0].x(), hi = lo;
+      for (const Vec2& p : o_.v) {
+        lo = std::min(lo, p.x());
+        hi = std::max(hi, p.x());
+      }
+      x0_ = lo;
+      len_ = hi - lo;
+      for (int k = 0; k < sections_; ++k)
+        section_area_.push_back(o_.area_between(lo + len_ * k / sections_, lo + len_ * (k + 1) / sections_));
+      streamwise_ = -o_.outward_normal(std::size_t(o_.inlet));
+    }
   }
   void observe(const State& s, const Evaluation& ev, Frame& f) const override {
+    if (c_.kind == ChannelParams::Kind::outline) return observe_outline(s, ev, f);
+    observe_straight(s, ev, f);
+  }
+  // Outline (monolayer): walls are the outline's wall edges in order; sections split each edge into
+  // `sections` equal parts; shear along the edge's direction (vertex k to k + 1), normal out of the
+  // fluid; stresses per wall area (section length x depth). pressure_drop_particles takes the held
+  // forces along the inlet's inward normal; areal_fraction_sections: interior particles' pi a^2 (by
+  // centre) over the fluid area of each section of x.
+  void observe_outline(const State& s, const Evaluation& ev, Frame& f) const {
+    const std::size_t n = s.size(), ns = std::size_t(sections_), nw = wall_edge_.size();
+    Vec3 wall = Vec3::Zero();
+    double held_s = 0.0;
+    std::vector<double> shear(nw * ns, 0.0), normal(nw * ns, 0.0), areal(ns, 0.0);
+    for (std::size_t i = 0; i < n && i < ev.hydro.F.size(); ++i) {
+      const Vec3& F = ev.hydro.F[i];
+      const Vec2 x(s.position[i].x(), s.position[i].y()), F2(F.x(), F.y());
+      if (!s.fixed.empty() && s.fixed[i]) held_s += F2.dot(streamwise_);
+      if (i < n - walls_) {
+        areal[section(x.x())] += kPi * s.radius[i] * s.radius[i];
+        continue;
+      }
+      wall += F;
+      const std::size_t e = o_.nearest_wall(x);
+      const std::size_t w = std::size_t(std::find(wall_edge_.begin(), wall_edge_.end(), e) - wall_edge_.begin());
+      const Vec2 t = (o_.b(e) - o_.a(e)).normalized();
+      const double along = std::clamp((x - o_.a(e)).dot(t) / o_.length(e), 0.0, 1.0 - 1e-12);
+      const std::size_t sec = std::size_t(along * double(ns));
+      shear[w * ns + sec] += -F2.dot(t);
+      normal[w * ns + sec] += F2.dot(-o_.outward_normal(e));
+    }
+    for (std::size_t w = 0; w < nw; ++w)
+      for (std::size_t k = 0; k < ns; ++k) {
+        const double A = o_.length(wall_edge_[w]) / double(ns) * c_.depth;
+        shear[w * ns + k] /= A;
+        normal[w * ns + k] /= A;
+      }
+    for (std::size_t k = 0; k < ns; ++k) areal[k] /= section_area_[k] > 0 ? section_area_[k] : 1.0;
+    f.observables["wall_force"] = Field{{3}, {wall.x(), wall.y(), wall.z()}, units::force, false};
+    f.observables["wall_shear_stress"] = Field{{nw_, sections_}, shear, units::stress, false};
+    f.observables["wall_normal_stress"] = Field{{nw_, sections_}, normal, units::stress, false};
+    f.set_scalar("pressure_drop_particles", -held_s / area_, units::stress);
+    f.observables["areal_fraction_sections"] = Field{{sections_}, areal, "", false};
+  }
+  void observe_straight(const State& s, const Evaluation& ev, Frame& f) const {
     const std::size_t n = s.size();
     Vec3 wall = Vec3::Zero();
     double held_x = 0.0;
@@ -241,6 +302,10 @@ class ChannelOutputs final : public Observer {
   double area_;
   int sections_ = 1, nw_ = 1;
   double x0_ = 0.0, len_ = 1.0;
+  Outline o_;
+  std::vector<std::size_t> wall_edge_;
+  std::vector<double> section_area_;
+  Vec2 streamwise_ = Vec2(1.0, 0.0);
 };
 
 class Gaps final : public Observer {

@@ -9,6 +9,7 @@
 #include "trees/placement.hpp"
 #include "trees/walls.hpp"
 #include "engine/core/channel.hpp"
+#include "engine/core/outline.hpp"
 
 #include <toml++/toml.h>
 
@@ -298,6 +299,24 @@ void read_particles(const Reader& R, const toml::table& t, Scene& s, const std::
                                                                              : PlacementParams::Region::sphere;
     // Open domains: count is required and volume_fraction sets the filled region. Periodic boxes:
     // the box fixes the volume, so give count or volume_fraction, not both.
+    if (s.walls.kind == ChannelParams::Kind::outline) {
+      // A monolayer at z = 0 in the outline's fluid (trees/walls.hpp fill_outline).
+      if (p.pattern != PlacementParams::Pattern::random)
+        R.fail(t.get("generate"), "[particles] generate", "an outline is filled with generate = \"random\"");
+      if (p.sizes != PlacementParams::Sizes::monodisperse)
+        R.fail(t.get("size_distribution"), "[particles] size_distribution", "an outline is filled with one size (monodisperse)");
+      if (t.contains("volume_fraction"))
+        R.fail(t.get("volume_fraction"), "[particles] volume_fraction",
+               "not used in an outline: give count (its areal fraction is count pi a^2 / fluid area)");
+      if (!t.contains("count")) R.fail(&t, "[particles] count", "required with generate in an outline");
+      p.count = R.integer(t, T, "count", 0, 1, 100000);
+      try {
+        s.positions = fill_outline(s.walls, p.count, p.radius, p.min_gap, p.seed);
+      } catch (const std::invalid_argument& e) {
+        R.fail(t.get("count"), "[particles] count", e.what());
+      }
+      s.radii.assign(s.positions.size(), p.radius);
+    } else {
     if (s.domain.periodic()) {
       if (t.contains("count") == t.contains("volume_fraction"))
         R.fail(&t, "[particles] count/volume_fraction", "in a periodic box give exactly one of count and volume_fraction");
@@ -323,7 +342,7 @@ void read_particles(const Reader& R, const toml::table& t, Scene& s, const std::
       }
     } else {
       if (!t.contains("count")) R.fail(&t, "[particles] count", "required with generate in an open domain");
-      if (s.walls.any())
+      if (s.walls.any() && s.walls.kind != ChannelParams::Kind::outline)
         R.fail(t.get("generate"), "[particles] generate",
                "fills a channel only in a periodic box (an open domain's walls are finite patches); give positions or file");
       p.count = R.integer(t, T, "count", 0, 1, kMaxCount);
@@ -380,6 +399,7 @@ void read_particles(const Reader& R, const toml::table& t, Scene& s, const std::
     } catch (const std::invalid_argument& e) {
       R.fail(phi_node, phi_where + " (generate = \"" + R.choice(t, T, "generate", "random", {"random", "lattice"}) + "\")",
              std::string(e.what()) + " (" + limits + ")");
+    }
     }
   }
   s.fixed.assign(s.positions.size(), 0);
@@ -452,16 +472,59 @@ void check_particles(const Reader& R, const toml::table& t, const Scene& s, cons
 // the interior particles, by append_walls).
 void read_walls(const Reader& R, const toml::table& t, Scene& s) {
   const std::string T = "walls";
-  R.only(t, T, {"kind", "height", "width", "length", "depth", "radius", "gap", "layers", "sections"});
+  R.only(t, T, {"kind", "height", "width", "length", "depth", "radius", "gap", "layers", "sections", "outline", "openings", "inlet"});
   ChannelParams& c = s.walls;
   c.kind = R.name(t, T, "kind", ChannelParams::Kind::none);
   if (!c.any()) {
-    for (const char* key : {"height", "width", "length", "depth", "radius", "gap", "layers", "sections"})
-      if (t.contains(key)) R.fail(t.get(key), std::string("[walls] ") + key, "only meaningful with a wall kind (kind = \"plane\", \"slit\" or \"duct\")");
+    for (const char* key : {"height", "width", "length", "depth", "radius", "gap", "layers", "sections", "outline", "openings", "inlet"})
+      if (t.contains(key)) R.fail(t.get(key), std::string("[walls] ") + key, "only meaningful with a wall kind (kind = \"plane\", \"slit\", \"duct\" or \"outline\")");
     return;
   }
   const bool per = s.domain.periodic();
   using K = ChannelParams::Kind;
+  if (c.kind == K::outline) {
+    for (const char* key : {"height", "width", "length"})
+      if (t.contains(key)) R.fail(t.get(key), std::string("[walls] ") + key, "not used with kind = \"outline\" (the outline gives the geometry)");
+    if (per) R.fail(t.get("kind"), "[walls] kind", "\"outline\" is for open domains (its walls and monolayer are not periodic)");
+    for (const char* key : {"outline", "openings", "inlet"})
+      if (!t.contains(key)) R.fail(&t, std::string("[walls] ") + key, "required with kind = \"outline\"");
+    const toml::array* pts = t.get("outline")->as_array();
+    if (!pts || pts->size() < 3) R.fail(t.get("outline"), "[walls] outline", "expected a list of at least 3 vertices [x, y] (a)");
+    for (const auto& e : *pts) {
+      const toml::array* xy = e.as_array();
+      std::array<double, 2> v{};
+      bool ok = xy && xy->size() == 2;
+      for (std::size_t k = 0; ok && k < 2; ++k) {
+        if (auto i = xy->get(k)->value_exact<int64_t>()) v[k] = double(*i);
+        else if (auto d = xy->get(k)->value_exact<double>()) v[k] = *d;
+        else ok = false;
+        ok = ok && std::isfinite(v[k]) && std::abs(v[k]) <= kMaxBoxEdge;
+      }
+      if (!ok) R.fail(&e, "[walls] outline", "each vertex is [x, y], two finite numbers of magnitude at most " + Reader::brief(kMaxBoxEdge) + " (a)");
+      c.outline.push_back(v);
+    }
+    const toml::array* op = t.get("openings")->as_array();
+    if (!op || op->empty()) R.fail(t.get("openings"), "[walls] openings", "expected a list of edge indices (edge k runs from vertex k to k + 1)");
+    for (const auto& e : *op) {
+      auto i = e.value_exact<int64_t>();
+      if (!i) R.fail(&e, "[walls] openings", "expected edge indices (integers)");
+      c.openings.push_back(long(*i));
+    }
+    c.inlet = R.integer(t, T, "inlet", -1, 0, long(c.outline.size()) - 1);
+    c.radius = R.number(t, T, "radius", 1.0, kMinRadius, kMaxRadius);
+    c.depth = R.number(t, T, "depth", 2.0 * c.radius, 0.0, kMaxBoxEdge, true);
+    c.gap = R.number(t, T, "gap", c.gap, 0.0, 100.0);
+    c.layers = R.integer(t, T, "layers", 1, 1, 10);
+    c.sections = R.integer(t, T, "sections", 1, 1, 10000);
+    try {
+      make_outline(c);
+    } catch (const std::invalid_argument& e) {
+      R.fail(t.get("outline"), "[walls] outline", e.what());
+    }
+    return;
+  }
+  for (const char* key : {"outline", "openings", "inlet"})
+    if (t.contains(key)) R.fail(t.get(key), std::string("[walls] ") + key, "only meaningful with kind = \"outline\"");
   auto need = [&](const char* key, bool needed, const std::string& why) {
     if (needed && !t.contains(key)) R.fail(&t, std::string("[walls] ") + key, "required " + why);
     if (!needed && t.contains(key)) R.fail(t.get(key), std::string("[walls] ") + key, "not used " + why);
@@ -807,7 +870,7 @@ Scene parse_scene(const toml::table& root, const std::string& source) {
   }
 
   const toml::table& flow = sub(R, root, "flow");
-  R.only(flow, "flow", {"kind", "rate", "peclet", "mean_velocity", "file", "file_hash"});
+  R.only(flow, "flow", {"kind", "rate", "peclet", "mean_velocity", "grid_spacing", "file", "file_hash"});
   s.flow.kind = R.name(flow, "flow", "kind", FlowParams::Kind::none);
   if (s.flow.kind == FlowParams::Kind::tabulated) {
     // A field exported by a fluid solver (io/flow_table.hpp); the resolved scene keeps its path and
@@ -843,12 +906,28 @@ Scene parse_scene(const toml::table& root, const std::string& source) {
     for (const char* key : {"rate", "peclet"})
       if (flow.contains(key))
         R.fail(flow.get(key), std::string("[flow] ") + key, "not used with kind = \"poiseuille\" (give mean_velocity)");
-    if (s.walls.kind != ChannelParams::Kind::slit && s.walls.kind != ChannelParams::Kind::duct)
-      R.fail(flow.get("kind"), "[flow] kind", "\"poiseuille\" flows through a channel: set [walls] kind = \"slit\" or \"duct\"");
+    if (s.walls.kind != ChannelParams::Kind::slit && s.walls.kind != ChannelParams::Kind::duct &&
+        s.walls.kind != ChannelParams::Kind::outline)
+      R.fail(flow.get("kind"), "[flow] kind", "\"poiseuille\" flows through a channel: set [walls] kind = \"slit\", \"duct\" or \"outline\"");
     if (!flow.contains("mean_velocity")) R.fail(&flow, "[flow] mean_velocity", "required with kind = \"poiseuille\"");
     s.flow.mean_velocity = R.number(flow, "flow", "mean_velocity", 0.0, -1e12, 1e12);
-  } else if (flow.contains("mean_velocity")) {
-    R.fail(flow.get("mean_velocity"), "[flow] mean_velocity", "only meaningful with kind = \"poiseuille\"");
+    if (s.walls.kind == ChannelParams::Kind::outline) {
+      // The 2D Stokes flow through the outline, solved here (engine/core/outline.hpp).
+      s.flow.grid_spacing = R.number(flow, "flow", "grid_spacing", 0.0, 0.0, kMaxBoxEdge);
+      try {
+        const Outline o = make_outline(s.walls);
+        s.flow.grid_spacing = outline_grid_spacing(o, s.flow.grid_spacing);
+        s.flow.grid = std::make_shared<FlowGrid>(solve_outline_flow(o, s.flow.mean_velocity, s.flow.grid_spacing).grid);
+      } catch (const std::invalid_argument& e) {
+        R.fail(flow.contains("grid_spacing") ? flow.get("grid_spacing") : flow.get("kind"),
+               flow.contains("grid_spacing") ? "[flow] grid_spacing" : "[flow] kind", e.what());
+      }
+    } else if (flow.contains("grid_spacing")) {
+      R.fail(flow.get("grid_spacing"), "[flow] grid_spacing", "only meaningful with [walls] kind = \"outline\" (its 2D flow is solved on a grid)");
+    }
+  } else {
+    for (const char* key : {"mean_velocity", "grid_spacing"})
+      if (flow.contains(key)) R.fail(flow.get(key), std::string("[flow] ") + key, "only meaningful with kind = \"poiseuille\"");
   }
   s.flow.rate = R.number(flow, "flow", "rate", 0.0, -1e12, 1e12);
   if (flow.contains("peclet")) {
@@ -1007,9 +1086,19 @@ std::string resolved_toml(const Scene& s) {
   if (s.walls.any()) {
     toml::table w{{"kind", name_of(s.walls.kind)}, {"radius", s.walls.radius}, {"gap", s.walls.gap},
                   {"layers", int64_t(s.walls.layers)}, {"sections", int64_t(s.walls.sections)}};
-    if (s.walls.kind != ChannelParams::Kind::plane) w.insert("height", s.walls.height);
+    if (s.walls.kind == ChannelParams::Kind::outline) {
+      toml::array pts, open;
+      for (const auto& v : s.walls.outline) pts.push_back(toml::array{v[0], v[1]});
+      for (long e : s.walls.openings) open.push_back(int64_t(e));
+      w.insert("outline", pts);
+      w.insert("openings", open);
+      w.insert("inlet", int64_t(s.walls.inlet));
+      w.insert("depth", s.walls.depth);
+    } else if (s.walls.kind != ChannelParams::Kind::plane) {
+      w.insert("height", s.walls.height);
+    }
     if (s.walls.kind == ChannelParams::Kind::duct) w.insert("width", s.walls.width);
-    if (!s.domain.periodic()) {
+    if (!s.domain.periodic() && s.walls.kind != ChannelParams::Kind::outline) {
       w.insert("length", s.walls.length);
       if (s.walls.kind != ChannelParams::Kind::duct) w.insert("depth", s.walls.depth);
     }
@@ -1052,7 +1141,9 @@ std::string resolved_toml(const Scene& s) {
   if (!pair.empty()) forces.insert("pair", pair);
   root.insert("forces", forces);
   if (s.flow.kind == FlowParams::Kind::poiseuille) {
-    root.insert("flow", toml::table{{"kind", name_of(s.flow.kind)}, {"mean_velocity", s.flow.mean_velocity}});
+    toml::table f{{"kind", name_of(s.flow.kind)}, {"mean_velocity", s.flow.mean_velocity}};
+    if (s.walls.kind == ChannelParams::Kind::outline) f.insert("grid_spacing", s.flow.grid_spacing);
+    root.insert("flow", f);
   } else if (s.flow.kind == FlowParams::Kind::tabulated && s.flow.grid) {
     char hex[20];
     std::snprintf(hex, sizeof hex, "%016llx", (unsigned long long)s.flow.grid->hash);

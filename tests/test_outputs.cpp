@@ -348,16 +348,8 @@ moments = "FTS"
 dt = 0.001
 steps = 2
 )";
-  // A channel: wall_force and pressure_drop_particles.
-  const std::string channel = R"([domain]
-kind = "periodic"
-box = [8.2, 10.05, 8.2]
-[walls]
-kind = "slit"
-height = 6.0
-[particles]
-positions = [[4.0, 5.0, 4.0]]
-[flow]
+  // A channel: wall_force and pressure_drop_particles; an outline channel: areal_fraction_sections.
+  const std::string channel_run = R"([flow]
 kind = "poiseuille"
 mean_velocity = 1.0
 [hydrodynamics]
@@ -366,12 +358,30 @@ model = "far_field"
 dt = 0.01
 steps = 1
 )";
+  const std::string channel = R"([domain]
+kind = "periodic"
+box = [8.2, 10.05, 8.2]
+[walls]
+kind = "slit"
+height = 6.0
+[particles]
+positions = [[4.0, 5.0, 4.0]]
+)" + channel_run;
+  const std::string outline = R"([walls]
+kind = "outline"
+outline = [[0, -5], [30, -5], [30, 5], [0, 5]]
+openings = [1, 3]
+inlet = 3
+[particles]
+positions = [[10.0, 0.0, 0.0]]
+)" + channel_run;
+  run_scene(outline, tmp / "e.h5");
   run_scene(brownian_box(2), tmp / "a.h5");
   run_scene(fts, tmp / "b.h5");
   run_scene(sheared, tmp / "c.h5");
   run_scene(channel, tmp / "d.h5");
   std::set<std::string> observables, elements;
-  for (const std::string& f : {tmp / "a.h5", tmp / "b.h5", tmp / "c.h5", tmp / "d.h5"}) {
+  for (const std::string& f : {tmp / "a.h5", tmp / "b.h5", tmp / "c.h5", tmp / "d.h5", tmp / "e.h5"}) {
     const auto info = io::inspect_trajectory(f);
     observables.insert(info.observables.begin(), info.observables.end());
     for (const auto& spec : info.particle_fields) elements.insert(spec.name);

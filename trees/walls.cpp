@@ -1,6 +1,8 @@
 #include "trees/walls.hpp"
 
 #include "engine/core/channel.hpp"
+#include "engine/core/outline.hpp"
+#include "engine/core/random.hpp"
 
 #include <cmath>
 #include <sstream>
@@ -42,15 +44,91 @@ std::vector<double> line_sites(bool periodic, double L, double extent, double mi
   return v;
 }
 
+// Wall sites of an outline (header).
+std::vector<Vec3> outline_walls(const ChannelParams& c) {
+  const Outline o = make_outline(c);
+  const double s = c.spacing(), r = c.radius, dn = s * std::sqrt(3.0) / 2.0, min_d = 2.0 * r + 0.5 * c.gap;
+  const std::size_t n = o.edges();
+  // Turning angle of the fluid boundary at vertex k (between edges k-1 and k), positive where the
+  // fluid's interior angle is below 180 degrees.
+  auto turn = [&](std::size_t k) {
+    const Vec2 t0 = (o.b((k + n - 1) % n) - o.a((k + n - 1) % n)).normalized(), t1 = (o.b(k) - o.a(k)).normalized();
+    return o.orientation * std::atan2(t0.x() * t1.y() - t0.y() * t1.x(), t0.dot(t1));
+  };
+  std::vector<Vec2> sites;
+  for (long layer = 0; layer < c.layers; ++layer)
+    for (std::size_t k = 0; k < n; ++k) {
+      if (o.open[k]) continue;
+      const double d = r + double(layer) * dn;
+      const Vec2 A = o.a(k), t = (o.b(k) - o.a(k)).normalized(), nrm = o.outward_normal(k);
+      auto ext = [&](std::size_t vertex, std::size_t other_edge) {
+        const double phi = turn(vertex);
+        // Past a convex fluid corner the rows run on to meet the next edge's; before a reflex one
+        // they stop where the next edge's rows begin (negative extension).
+        return (!o.open[other_edge] && std::abs(phi) > 1e-9) ? d * std::tan(0.5 * phi) : 0.0;
+      };
+      const double t0 = -ext(k, (k + n - 1) % n), t1 = o.length(k) + ext((k + 1) % n, (k + 1) % n);
+      const double len = t1 - t0;
+      long m = long(std::floor(len / s + 1e-9)) + 1;
+      const long tight = long(std::ceil(len / s - 1e-9)) + 1;
+      if (tight > 1 && len / double(tight - 1) >= min_d - 1e-12) m = tight;
+      const double step = m > 1 ? len / double(m - 1) : 0.0;
+      const bool shifted = layer % 2 == 1 && m > 1;
+      for (long q = 0; q < (shifted ? m - 1 : m); ++q) {
+        const double along = t0 + (double(q) + (shifted ? 0.5 : 0.0)) * step;
+        sites.push_back(A + along * t + d * nrm);
+      }
+    }
+  std::vector<Vec3> out;
+  for (const Vec2& p : sites) {
+    if (o.contains(p) || o.distance(p) < r - 1e-9) continue;
+    bool clash = false;
+    for (const Vec3& q : out) clash = clash || (Vec2(q.x(), q.y()) - p).norm() < min_d - 1e-9;
+    if (!clash) out.emplace_back(p.x(), p.y(), 0.0);
+  }
+  return out;
+}
+
 }  // namespace
 
+std::vector<Vec3> fill_outline(const ChannelParams& c, long count, double a, double min_gap, std::uint64_t seed) {
+  const Outline o = make_outline(c);
+  Vec2 lo = o.v[0], hi = o.v[0];
+  for (const Vec2& p : o.v) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  RandomStream rs = RandomStream::for_purpose(seed, Purpose::placement, 2);
+  std::vector<Vec3> out;
+  const long max_trials = 1000 * std::max<long>(count, 1);
+  for (long trial = 0; long(out.size()) < count && trial < max_trials; ++trial) {
+    const Vec2 p(lo.x() + (hi.x() - lo.x()) * rs.uniform(), lo.y() + (hi.y() - lo.y()) * rs.uniform());
+    if (!o.contains(p) || o.distance(p) < a || o.distance(p, true) < a + c.gap) continue;
+    bool clash = false;
+    for (const Vec3& q : out) clash = clash || (Vec2(q.x(), q.y()) - p).norm() < 2.0 * a + min_gap;
+    if (!clash) out.emplace_back(p.x(), p.y(), 0.0);
+  }
+  if (long(out.size()) < count) {
+    std::ostringstream e;
+    e << "only " << out.size() << " of " << count << " particles of radius " << a << " a fit at random in the outline's "
+      << o.area << " a^2 of fluid (areal fraction " << double(count) * kPi * a * a / o.area << " asked)";
+    throw std::invalid_argument(e.str());
+  }
+  return out;
+}
+
 double wall_thickness(const ChannelParams& c) {
-  return 2.0 * c.radius + double(c.layers - 1) * c.spacing() / std::sqrt(2.0);
+  const double row = c.kind == ChannelParams::Kind::outline ? std::sqrt(3.0) / 2.0 : 1.0 / std::sqrt(2.0);
+  return 2.0 * c.radius + double(c.layers - 1) * c.spacing() * row;
 }
 
 std::vector<Vec3> wall_particles(const ChannelParams& c, const Domain& d) {
   std::vector<Vec3> out;
   if (!c.any()) return out;
+  if (c.kind == ChannelParams::Kind::outline) {
+    if (d.periodic()) throw std::invalid_argument("an outline channel lies in an open domain (its monolayer is not periodic)");
+    return outline_walls(c);
+  }
   const bool per = d.periodic();
   const Vec3 ctr = channel_centre(d);
   const double s = c.spacing(), dn = s / std::sqrt(2.0), r = c.radius, T = wall_thickness(c);
@@ -109,7 +187,8 @@ std::vector<Vec3> wall_particles(const ChannelParams& c, const Domain& d) {
       wall(2, +1.0, 0.5 * c.width, 1, false, span_y, true);
       break;
     }
-    case ChannelParams::Kind::none: break;
+    case ChannelParams::Kind::none:
+    case ChannelParams::Kind::outline: break;
   }
   return out;
 }

@@ -3,6 +3,7 @@
 #include "engine/app/run.hpp"
 
 #include "engine/core/channel.hpp"
+#include "engine/core/outline.hpp"
 #include "engine/core/output.hpp"
 #include "engine/observers.hpp"
 #include "engine/pair_forces.hpp"
@@ -163,7 +164,20 @@ StiffnessBound stiffness_bound(const Scene& scene, const ResolvedModel& model) {
   // Stokes drag of the ambient flow's velocity difference across a pair at contact.
   double f_ext = 0.0;
   for (const Vec3& f : scene.forces.external_force) f_ext = std::max(f_ext, f.norm());
-  if (scene.flow.kind == FlowParams::Kind::poiseuille) {
+  if (scene.flow.kind == FlowParams::Kind::poiseuille && scene.walls.kind == ChannelParams::Kind::outline) {
+    // The largest shear rate of the solved outline flow, over its grid nodes.
+    const auto field = make_ambient_field(scene.flow, scene.walls, scene.domain);
+    const auto& tf = dynamic_cast<const TabulatedFlow&>(*field);
+    const FlowGrid& g = *scene.flow.grid;
+    double rate = 0.0;
+    for (double x : g.axis[0])
+      for (double y : g.axis[1]) {
+        Mat3 G;
+        tf.velocity(Vec3(x, y, 0.0), &G);
+        rate = std::max(rate, G.norm());
+      }
+    f_ext += 6 * kPi * scene.fluid.viscosity * amax * rate * 2 * amax;
+  } else if (scene.flow.kind == FlowParams::Kind::poiseuille) {
     // The largest shear rate of a channel flow is at its walls: G H / (2 mu) (for a duct, bounded by
     // that of the slit of the same mean velocity and height times the duct's larger G).
     const ChannelFlow cf(scene.walls, scene.domain, scene.flow.mean_velocity);
@@ -309,7 +323,13 @@ int check(Simulation& sim, const CheckOptions& opt, std::FILE* out) {
     std::fprintf(out, "walls: %s, %zu wall particles of radius %.4g a (gap %.4g a, %ld layer%s, thickness %.4g a)",
                  name_of(s.walls.kind), s.wall_count, s.walls.radius, s.walls.gap, s.walls.layers,
                  s.walls.layers > 1 ? "s" : "", wall_thickness(s.walls));
-    if (s.walls.kind != ChannelParams::Kind::plane) std::fprintf(out, ", height %.4g a", s.walls.height);
+    if (s.walls.kind == ChannelParams::Kind::outline) {
+      const Outline o = make_outline(s.walls);
+      std::fprintf(out, ", outline of %zu edges enclosing %.4g a^2, inlet edge %ld (width %.4g a), monolayer depth %.4g a",
+                   o.edges(), o.area, o.inlet, o.length(std::size_t(o.inlet)), s.walls.depth);
+    } else if (s.walls.kind != ChannelParams::Kind::plane) {
+      std::fprintf(out, ", height %.4g a", s.walls.height);
+    }
     if (s.walls.kind == ChannelParams::Kind::duct) std::fprintf(out, ", width %.4g a", s.walls.width);
     std::fprintf(out, "\n  %zu interior particles", s.interior_count());
     if (s.domain.periodic() && s.walls.kind != ChannelParams::Kind::plane)
@@ -382,7 +402,18 @@ int check(Simulation& sim, const CheckOptions& opt, std::FILE* out) {
   if (s.flow.kind != FlowParams::Kind::none) {
     char pe[96] = "";
     if (s.flow.peclet != 0.0) std::snprintf(pe, sizeof pe, " (from peclet %.4g = 6 pi mu a^3 rate / kT)", s.flow.peclet);
-    if (s.flow.kind == FlowParams::Kind::poiseuille) {
+    if (s.flow.kind == FlowParams::Kind::poiseuille && s.walls.kind == ChannelParams::Kind::outline) {
+      const Outline o = make_outline(s.walls);
+      const OutlineFlow f = solve_outline_flow(o, s.flow.mean_velocity, s.flow.grid_spacing);
+      std::fprintf(out, "  ambient flow: pressure-driven 2D Stokes flow through the outline (solved on a %zu x %zu grid of "
+                   "spacing %.4g a, %zu fluid nodes), inlet mean velocity %.4g a/time, (p_in - p_out)/mu = %.4g /time; outlets:",
+                   f.grid.axis[0].size(), f.grid.axis[1].size(), f.h, f.fluid_nodes, s.flow.mean_velocity, f.pressure_drop_over_mu);
+      const double Q = std::abs(f.flux[std::size_t(o.inlet)]);
+      for (std::size_t k = 0; k < o.edges(); ++k)
+        if (o.open[k] && long(k) != o.inlet)
+          std::fprintf(out, " edge %zu %.4g of the flux", k, Q > 0 ? f.flux[k] / Q : 0.0);
+      std::fprintf(out, "\n");
+    } else if (s.flow.kind == FlowParams::Kind::poiseuille) {
       const ChannelFlow cf(s.walls, s.domain, s.flow.mean_velocity);
       std::fprintf(out, "  ambient flow: poiseuille through the %s, mean velocity %.4g a/time, centreline %.4g a/time, "
                    "-dp/dx = %.4g mu/(a time)\n",

@@ -1,5 +1,7 @@
 #include "engine/core/channel.hpp"
 
+#include "engine/core/outline.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -13,6 +15,8 @@ bool in_channel(const ChannelParams& c, const Domain& d, const Vec3& x) {
     case ChannelParams::Kind::plane: return r.y() > 0.0;
     case ChannelParams::Kind::slit: return std::abs(r.y()) < 0.5 * c.height;
     case ChannelParams::Kind::duct: return std::abs(r.y()) < 0.5 * c.height && std::abs(r.z()) < 0.5 * c.width;
+    case ChannelParams::Kind::outline:
+      return std::abs(x.z()) < 0.5 * c.depth && make_outline(c).contains(Vec2(x.x(), x.y()));
   }
   return true;
 }
@@ -21,6 +25,10 @@ double cross_section_area(const ChannelParams& c, const Domain& d) {
   switch (c.kind) {
     case ChannelParams::Kind::slit: return c.height * (d.periodic() ? d.box.z() : c.depth);
     case ChannelParams::Kind::duct: return c.height * c.width;
+    case ChannelParams::Kind::outline: {
+      const Outline o = make_outline(c);
+      return o.length(std::size_t(o.inlet)) * c.depth;
+    }
     default: return 0.0;
   }
 }
@@ -196,6 +204,11 @@ void TabulatedFlow::sample(const std::vector<Vec3>& x, FlowSample& out) const {
 }
 
 std::shared_ptr<const AmbientField> make_ambient_field(const FlowParams& f, const ChannelParams& c, const Domain& d) {
+  if (f.kind == FlowParams::Kind::poiseuille && c.kind == ChannelParams::Kind::outline) {
+    if (f.grid) return std::make_shared<TabulatedFlow>(f.grid);  // solved when the scene was read
+    auto g = std::make_shared<FlowGrid>(solve_outline_flow(make_outline(c), f.mean_velocity, f.grid_spacing).grid);
+    return std::make_shared<TabulatedFlow>(std::move(g));
+  }
   if (f.kind == FlowParams::Kind::poiseuille) return std::make_shared<ChannelFlow>(c, d, f.mean_velocity);
   if (f.kind == FlowParams::Kind::tabulated) {
     if (!f.grid) throw std::invalid_argument("make_ambient_field: a tabulated flow without its grid");

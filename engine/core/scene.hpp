@@ -91,7 +91,8 @@ struct FlowParams {
   enum class Kind { none, simple_shear, planar_extension, poiseuille, tabulated } kind = Kind::none;
   std::shared_ptr<const FlowGrid> grid;  // tabulated: the field
   double rate = 0.0;  // shear or extension rate [1/time]
-  double mean_velocity = 0.0;  // poiseuille: mean velocity U over the channel's cross-section [a/time]
+  double mean_velocity = 0.0;  // poiseuille: mean velocity U over the channel's (outline: inlet's) cross-section [a/time]
+  double grid_spacing = 0.0;   // poiseuille through an outline: spacing of the 2D Stokes grid [a] (0 = automatic)
   // Peclet number Pe = 6 pi mu a^3 rate / kT (a = 1, the reference radius; docs/rheology.md), when
   // the scene gave it instead of `rate` (0 = not given); `rate` then holds Pe kT / (6 pi mu).
   double peclet = 0.0;
@@ -109,7 +110,7 @@ struct Names<FlowParams::Kind> {
 // Walls of immobile wall particles bounding a channel (the [walls] table; geometry, placement and
 // the channel flows: engine/core/channel.hpp, trees/walls.hpp, docs/channels.md).
 struct ChannelParams {
-  enum class Kind { none, plane, slit, duct } kind = Kind::none;
+  enum class Kind { none, plane, slit, duct, outline } kind = Kind::none;
   double height = 0.0;  // H: fluid gap between the walls normal to y [a] (slit, duct)
   double width = 0.0;   // W: fluid gap between the walls normal to z [a] (duct)
   double length = 0.0;  // open domains: extent of the walls along x [a]
@@ -118,17 +119,24 @@ struct ChannelParams {
   double gap = 0.05;    // surface gap between neighbouring wall particles in a layer [a]
   long sections = 1;   // sections along x of the wall-stress and volume-fraction outputs
   long layers = 1;      // layers per wall; layer k sits (2 r_w + gap) k / sqrt(2) further out,
-                        // shifted by half a spacing along both wall directions (closing the pores)
+                        // shifted by half a spacing along both wall directions (closing the pores);
+                        // outline: a row k (2 r_w + gap) sqrt(3)/2 further out, shifted half a spacing
+  // outline (engine/core/outline.hpp): polygon vertices (x, y) [a], edge k from vertex k to k + 1
+  // (the last closes it); the edges listed in `openings` carry no wall, one of them is the inlet.
+  std::vector<std::array<double, 2>> outline;
+  std::vector<long> openings;
+  long inlet = -1;
   bool any() const { return kind != Kind::none; }
   double spacing() const { return 2.0 * radius + gap; }
 };
 
 template <>
 struct Names<ChannelParams::Kind> {
-  static constexpr NameTable<ChannelParams::Kind, 4> table{{{ChannelParams::Kind::none, "none"},
+  static constexpr NameTable<ChannelParams::Kind, 5> table{{{ChannelParams::Kind::none, "none"},
                                                             {ChannelParams::Kind::plane, "plane"},
                                                             {ChannelParams::Kind::slit, "slit"},
-                                                            {ChannelParams::Kind::duct, "duct"}}};
+                                                            {ChannelParams::Kind::duct, "duct"},
+                                                            {ChannelParams::Kind::outline, "outline"}}};
 };
 
 // Hydrodynamic level, cheapest first: free draining -> far field -> Stokesian dynamics.

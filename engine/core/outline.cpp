@@ -1,0 +1,435 @@
+#include "engine/core/outline.hpp"
+
+#include <Eigen/SparseLU>
+#include <Eigen/Sparse>
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+namespace stokesian {
+
+namespace {
+
+double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
+
+double segment_distance(const Vec2& p, const Vec2& a, const Vec2& b) {
+  const Vec2 d = b - a;
+  const double t = std::clamp((p - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
+  return (p - a - t * d).norm();
+}
+
+// Proper intersection of segments ab and cd (shared end points excluded).
+bool segments_cross(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& d) {
+  const double d1 = cross2(b - a, c - a), d2 = cross2(b - a, d - a);
+  const double d3 = cross2(d - c, a - c), d4 = cross2(d - c, b - c);
+  return ((d1 > 0 && d2 < 0) || (d1 < 0 && d2 > 0)) && ((d3 > 0 && d4 < 0) || (d3 < 0 && d4 > 0));
+}
+
+}  // namespace
+
+Vec2 Outline::outward_normal(std::size_t k) const {
+  const Vec2 t = (b(k) - a(k)).normalized();
+  // Counter-clockwise: the fluid lies to the left of each edge, so outward is to the right.
+  return orientation * Vec2(t.y(), -t.x());
+}
+
+bool Outline::contains(const Vec2& p) const {
+  if (distance(p) < 1e-12 * (1.0 + p.norm())) return false;
+  bool in = false;
+  for (std::size_t k = 0; k < v.size(); ++k) {
+    const Vec2 A = a(k), B = b(k);
+    if ((A.y() > p.y()) != (B.y() > p.y())) {
+      const double x = A.x() + (p.y() - A.y()) * (B.x() - A.x()) / (B.y() - A.y());
+      if (p.x() < x) in = !in;
+    }
+  }
+  return in;
+}
+
+double Outline::distance(const Vec2& p, bool walls_only) const {
+  double d = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < v.size(); ++k)
+    if (!walls_only || !open[k]) d = std::min(d, segment_distance(p, a(k), b(k)));
+  return d;
+}
+
+std::size_t Outline::nearest_wall(const Vec2& p) const {
+  std::size_t best = 0;
+  double d = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < v.size(); ++k)
+    if (!open[k]) {
+      const double e = segment_distance(p, a(k), b(k));
+      if (e < d) {
+        d = e;
+        best = k;
+      }
+    }
+  return best;
+}
+
+double Outline::area_between(double x0, double x1) const {
+  // Sutherland-Hodgman clipping against x >= x0, then x <= x1; shoelace area.
+  auto clip = [](const std::vector<Vec2>& in, double x, double side) {
+    std::vector<Vec2> out;
+    for (std::size_t k = 0; k < in.size(); ++k) {
+      const Vec2 P = in[k], Q = in[(k + 1) % in.size()];
+      const bool pin = side * (P.x() - x) >= 0, qin = side * (Q.x() - x) >= 0;
+      if (pin) out.push_back(P);
+      if (pin != qin) out.push_back(P + (x - P.x()) / (Q.x() - P.x()) * (Q - P));
+    }
+    return out;
+  };
+  const std::vector<Vec2> c = clip(clip(v, x0, 1.0), x1, -1.0);
+  double A2 = 0;
+  for (std::size_t k = 0; k < c.size(); ++k) A2 += cross2(c[k], c[(k + 1) % c.size()]);
+  return 0.5 * std::abs(A2);
+}
+
+Outline make_outline(const ChannelParams& c) {
+  Outline o;
+  for (const auto& p : c.outline) o.v.emplace_back(p[0], p[1]);
+  const std::size_t n = o.v.size();
+  if (n < 3) throw std::invalid_argument("an outline needs at least 3 vertices (got " + std::to_string(n) + ")");
+  for (std::size_t k = 0; k < n; ++k)
+    if (o.length(k) <= 1e-9) {
+      std::ostringstream s;
+      s << "outline edge " << k << " (vertices " << k << " and " << (k + 1) % n << ") has zero length";
+      throw std::invalid_argument(s.str());
+    }
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = i + 1; j < n; ++j)
+      if (segments_cross(o.a(i), o.b(i), o.a(j), o.b(j))) {
+        std::ostringstream s;
+        s << "outline edges " << i << " and " << j << " cross (the outline must be a simple polygon)";
+        throw std::invalid_argument(s.str());
+      }
+  double A2 = 0;
+  for (std::size_t k = 0; k < n; ++k) A2 += cross2(o.a(k), o.b(k));
+  o.area = 0.5 * std::abs(A2);
+  o.orientation = A2 > 0 ? 1.0 : -1.0;
+  o.open.assign(n, 0);
+  for (long e : c.openings) {
+    if (e < 0 || std::size_t(e) >= n) {
+      std::ostringstream s;
+      s << "opening " << e << " is not an edge of the outline (edges 0 to " << n - 1 << ")";
+      throw std::invalid_argument(s.str());
+    }
+    if (o.open[std::size_t(e)]) throw std::invalid_argument("opening " + std::to_string(e) + " is listed twice");
+    o.open[std::size_t(e)] = 1;
+  }
+  o.inlet = c.inlet;
+  if (o.inlet < 0 || std::size_t(o.inlet) >= n || !o.open[std::size_t(o.inlet)]) {
+    std::ostringstream s;
+    s << "the inlet (edge " << c.inlet << ") must be one of the openings";
+    throw std::invalid_argument(s.str());
+  }
+  return o;
+}
+
+namespace {
+
+// Greatest common divisor of non-negative lengths, to a relative tolerance.
+double real_gcd(double a, double b, double tol) {
+  if (a < b) std::swap(a, b);
+  while (b > tol) {
+    const double r = std::fmod(a, b);
+    a = b;
+    b = (r > b - tol) ? 0.0 : r;
+  }
+  return a;
+}
+
+}  // namespace
+
+double outline_grid_spacing(const Outline& o, double h) {
+  const Vec2 lo = o.v[0];
+  Vec2 mn = lo;
+  for (const Vec2& p : o.v) mn = mn.cwiseMin(p);
+  for (std::size_t k = 0; k < o.edges(); ++k) {
+    const Vec2 d = o.b(k) - o.a(k);
+    if (std::abs(d.x()) > 1e-9 && std::abs(d.y()) > 1e-9) {
+      std::ostringstream s;
+      s << "the flow through an outline is solved for edges parallel to x or y; edge " << k << " from ("
+        << o.a(k).transpose() << ") to (" << o.b(k).transpose() << ") is oblique";
+      throw std::invalid_argument(s.str());
+    }
+  }
+  if (h > 0) {
+    for (std::size_t k = 0; k < o.edges(); ++k)
+      for (int ax = 0; ax < 2; ++ax) {
+        const double t = (o.v[k][ax] - mn[ax]) / h;
+        if (std::abs(t - std::round(t)) > 1e-6) {
+          std::ostringstream s;
+          s << "vertex " << k << " (" << o.v[k].transpose() << ") is not on the grid of spacing " << h
+            << " a (every vertex coordinate minus the smallest must be a multiple of grid_spacing)";
+          throw std::invalid_argument(s.str());
+        }
+      }
+    return h;
+  }
+  double g = 0;
+  for (const Vec2& p : o.v)
+    for (int ax = 0; ax < 2; ++ax) {
+      const double d = p[ax] - mn[ax];
+      if (d > 1e-9) g = g == 0 ? d : real_gcd(g, d, 1e-7 * d);
+    }
+  const double target = o.length(std::size_t(o.inlet)) / 40.0;
+  const double k = std::max(1.0, std::ceil(g / target - 1e-9));
+  return g / k;
+}
+
+OutlineFlow solve_outline_flow(const Outline& o, double mean_velocity, double h_req) {
+  OutlineFlow out;
+  const double h = outline_grid_spacing(o, h_req);
+  out.h = h;
+  Vec2 mn = o.v[0], mx = o.v[0];
+  for (const Vec2& p : o.v) {
+    mn = mn.cwiseMin(p);
+    mx = mx.cwiseMax(p);
+  }
+  const long nx = long(std::lround((mx.x() - mn.x()) / h)) + 1, ny = long(std::lround((mx.y() - mn.y()) / h)) + 1;
+  if (double(nx) * double(ny) > 2e7) {
+    std::ostringstream s;
+    s << "the flow grid would have " << nx << " x " << ny << " nodes (at most 2e7); give a larger grid_spacing";
+    throw std::invalid_argument(s.str());
+  }
+  auto pos = [&](long i, long j) { return Vec2(mn.x() + double(i) * h, mn.y() + double(j) * h); };
+  auto id = [&](long i, long j) { return std::size_t(j * nx + i); };
+  const std::size_t N = std::size_t(nx * ny);
+
+  // Node roles: 0 outside, 1 fluid, 2 boundary (on an edge; `edge` names one).
+  std::vector<signed char> role(N, 0);
+  std::vector<int> edge(N, -1);
+  for (long j = 0; j < ny; ++j)
+    for (long i = 0; i < nx; ++i) {
+      const Vec2 p = pos(i, j);
+      for (std::size_t k = 0; k < o.edges(); ++k)
+        if (segment_distance(p, o.a(k), o.b(k)) < 1e-7 * h) {
+          // A vertex belongs to both its edges; prefer a wall (psi constant there either way).
+          if (edge[id(i, j)] < 0 || !o.open[k]) edge[id(i, j)] = int(k);
+          role[id(i, j)] = 2;
+        }
+      if (role[id(i, j)] == 0 && o.contains(p)) role[id(i, j)] = 1;
+    }
+  std::vector<long> unknown(N, -1);
+  long nu = 0;
+  for (std::size_t k = 0; k < N; ++k)
+    if (role[k] == 1) unknown[k] = nu++;
+  out.fluid_nodes = std::size_t(nu);
+  if (nu == 0) throw std::invalid_argument("the outline holds no grid node inside it; give a smaller grid_spacing");
+
+  // Stream function on the boundary for edge fluxes q (outward, per unit depth).
+  auto boundary_psi = [&](const std::vector<double>& q) {
+    std::vector<double> pv(o.edges() + 1, 0.0);
+    for (std::size_t k = 0; k < o.edges(); ++k) pv[k + 1] = pv[k] + (o.open[k] ? o.orientation * q[k] : 0.0);
+    std::vector<double> psi(N, 0.0);
+    for (std::size_t n = 0; n < N; ++n)
+      if (role[n] == 2) {
+        const std::size_t k = std::size_t(edge[n]);
+        double val = pv[k];
+        if (o.open[k]) {
+          const Vec2 p = pos(long(n % std::size_t(nx)), long(n / std::size_t(nx)));
+          const double s = std::clamp((p - o.a(k)).norm() / o.length(k), 0.0, 1.0);
+          val += o.orientation * q[k] * (3 * s * s - 2 * s * s * s);
+        }
+        psi[n] = val;
+      }
+    return psi;
+  };
+
+  // Matrix of the 13-point stencil with ghost closures; rhs from known boundary values.
+  struct Tap {
+    int di, dj;
+    double c;
+  };
+  const Tap taps[] = {{0, 0, 20},  {1, 0, -8}, {-1, 0, -8}, {0, 1, -8}, {0, -1, -8}, {1, 1, 2},  {1, -1, 2},
+                      {-1, 1, 2},  {-1, -1, 2}, {2, 0, 1},   {-2, 0, 1}, {0, 2, 1},   {0, -2, 1}};
+  auto role_at = [&](long i, long j) -> int { return (i < 0 || j < 0 || i >= nx || j >= ny) ? 0 : role[id(i, j)]; };
+  std::vector<Eigen::Triplet<double>> trip;
+  // Per row, the known-value contributions: rhs_row = sum w * psi_known[node].
+  std::vector<std::vector<std::pair<std::size_t, double>>> known(static_cast<std::size_t>(nu));
+  auto narrow = [&](long i, long j) {
+    std::ostringstream s;
+    s << "the outline is narrower than three grid spacings near (" << pos(i, j).transpose() << "); give a smaller grid_spacing";
+    return std::invalid_argument(s.str());
+  };
+  for (long j = 0; j < ny; ++j)
+    for (long i = 0; i < nx; ++i) {
+      if (role[id(i, j)] != 1) continue;
+      const long row = unknown[id(i, j)];
+      auto add = [&](long ii, long jj, double c) {
+        const int r = role_at(ii, jj);
+        if (r == 1) trip.emplace_back(row, unknown[id(ii, jj)], c);
+        else if (r == 2) known[std::size_t(row)].push_back({id(ii, jj), -c});
+        else throw narrow(i, j);
+      };
+      for (const Tap& t : taps) {
+        const long ii = i + t.di, jj = j + t.dj;
+        if (role_at(ii, jj) != 0) {
+          add(ii, jj, t.c);
+          continue;
+        }
+        // A ghost: an arm point two out with the boundary between (walls on grid lines admit no other).
+        const bool arm2 = (std::abs(t.di) == 2 && t.dj == 0) || (std::abs(t.dj) == 2 && t.di == 0);
+        const long bi = i + t.di / 2, bj = j + t.dj / 2;
+        if (!arm2 || role_at(bi, bj) != 2) throw narrow(i, j);
+        // psi_g = 3 psi_1 - psi_2 / 2 - 3 psi_b / 2: psi_1 this node, psi_2 one further in.
+        add(i, j, 3.0 * t.c);
+        add(i - t.di / 2, j - t.dj / 2, -0.5 * t.c);
+        add(bi, bj, -1.5 * t.c);
+      }
+    }
+  Eigen::SparseMatrix<double> A(nu, nu);
+  A.setFromTriplets(trip.begin(), trip.end());
+  Eigen::SparseLU<Eigen::SparseMatrix<double>> lu;
+  lu.analyzePattern(A);
+  lu.factorize(A);
+  if (lu.info() != Eigen::Success) throw std::runtime_error("solve_outline_flow: the stream-function system is singular");
+
+  auto solve = [&](const std::vector<double>& q) {
+    std::vector<double> psi = boundary_psi(q);
+    Eigen::VectorXd rhs(nu);
+    for (long r = 0; r < nu; ++r) {
+      double s = 0;
+      for (const auto& [n, w] : known[std::size_t(r)]) s += w * psi[n];
+      rhs[r] = s;
+    }
+    const Eigen::VectorXd x = lu.solve(rhs);
+    for (std::size_t n = 0; n < N; ++n)
+      if (role[n] == 1) psi[n] = x[unknown[n]];
+    return psi;
+  };
+
+  // lap psi at fluid nodes (5-point; neighbours are fluid or boundary).
+  auto laplacian = [&](const std::vector<double>& psi) {
+    std::vector<double> L(N, std::numeric_limits<double>::quiet_NaN());
+    for (long j = 1; j + 1 < ny; ++j)
+      for (long i = 1; i + 1 < nx; ++i)
+        if (role[id(i, j)] == 1)
+          L[id(i, j)] = (psi[id(i + 1, j)] + psi[id(i - 1, j)] + psi[id(i, j + 1)] + psi[id(i, j - 1)] - 4 * psi[id(i, j)]) / (h * h);
+    return L;
+  };
+  // Deep nodes: fluid with all eight neighbours fluid (lap psi known around them).
+  std::vector<char> deep(N, 0);
+  for (long j = 1; j + 1 < ny; ++j)
+    for (long i = 1; i + 1 < nx; ++i) {
+      bool d = role[id(i, j)] == 1;
+      for (int dj = -1; d && dj <= 1; ++dj)
+        for (int di = -1; d && di <= 1; ++di) d = role[id(i + di, j + dj)] == 1;
+      deep[id(i, j)] = d;
+    }
+  // The deep node nearest each opening's centre and its distance to the opening's line.
+  std::vector<std::size_t> port(o.edges(), N);
+  std::vector<double> port_depth(o.edges(), 0.0);
+  for (std::size_t k = 0; k < o.edges(); ++k) {
+    if (!o.open[k]) continue;
+    const Vec2 c = 0.5 * (o.a(k) + o.b(k));
+    double best = std::numeric_limits<double>::infinity();
+    for (std::size_t n = 0; n < N; ++n)
+      if (deep[n]) {
+        const double d = (pos(long(n % std::size_t(nx)), long(n / std::size_t(nx))) - c).norm();
+        if (d < best) {
+          best = d;
+          port[k] = n;
+        }
+      }
+    if (port[k] == N) throw std::invalid_argument("the outline is too narrow for its grid; give a smaller grid_spacing");
+    port_depth[k] = -(pos(long(port[k] % std::size_t(nx)), long(port[k] / std::size_t(nx))) - c).dot(o.outward_normal(k));
+  }
+  // Pressure / mu at the openings relative to the inlet's (breadth-first over deep nodes).
+  auto opening_pressures = [&](const std::vector<double>& psi, const std::vector<double>& q) {
+    const std::vector<double> L = laplacian(psi);
+    auto gx = [&](long i, long j) { return (L[id(i, j + 1)] - L[id(i, j - 1)]) / (2 * h); };   // dp/dx / mu
+    auto gy = [&](long i, long j) { return -(L[id(i + 1, j)] - L[id(i - 1, j)]) / (2 * h); };  // dp/dy / mu
+    std::vector<double> p(N, std::numeric_limits<double>::quiet_NaN());
+    std::deque<std::size_t> queue{port[std::size_t(o.inlet)]};
+    p[queue.front()] = 0.0;
+    while (!queue.empty()) {
+      const std::size_t n = queue.front();
+      queue.pop_front();
+      const long i = long(n % std::size_t(nx)), j = long(n / std::size_t(nx));
+      const int step[4][2] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
+      for (const auto& s : step) {
+        const long ii = i + s[0], jj = j + s[1];
+        if (ii < 0 || jj < 0 || ii >= nx || jj >= ny) continue;
+        const std::size_t m = id(ii, jj);
+        if (!deep[m] || !std::isnan(p[m])) continue;
+        const double g = s[0] != 0 ? 0.5 * (gx(i, j) + gx(ii, jj)) * double(s[0]) : 0.5 * (gy(i, j) + gy(ii, jj)) * double(s[1]);
+        p[m] = p[n] + g * h;
+        queue.push_back(m);
+      }
+    }
+    std::vector<double> P(o.edges(), 0.0);
+    for (std::size_t k = 0; k < o.edges(); ++k) {
+      if (!o.open[k]) continue;
+      if (std::isnan(p[port[k]]))
+        throw std::invalid_argument("opening " + std::to_string(k) + " is not connected to the inlet through the fluid");
+      const double w = o.length(k);
+      // Fully developed: dp/dn (outward) = -12 mu q / w^3, from the port node out to the opening.
+      P[k] = p[port[k]] - 12.0 * q[k] / (w * w * w) * port_depth[k];
+    }
+    return P;
+  };
+
+  const double Q = mean_velocity * o.length(std::size_t(o.inlet));
+  std::vector<std::size_t> outlets;
+  for (std::size_t k = 0; k < o.edges(); ++k)
+    if (o.open[k] && long(k) != o.inlet) outlets.push_back(k);
+  if (outlets.empty()) throw std::invalid_argument("an outline with flow needs at least one outlet besides the inlet");
+  std::vector<double> share(outlets.size(), 1.0);
+  if (outlets.size() > 1 && Q != 0.0) {
+    // P(j, m): pressure at outlet m with all of Q through outlet j.
+    const std::size_t m = outlets.size();
+    Eigen::MatrixXd P(m, m);
+    for (std::size_t j = 0; j < m; ++j) {
+      std::vector<double> q(o.edges(), 0.0);
+      q[std::size_t(o.inlet)] = -Q;
+      q[outlets[j]] = Q;
+      const std::vector<double> Pj = opening_pressures(solve(q), q);
+      for (std::size_t k = 0; k < m; ++k) P(long(j), long(k)) = Pj[outlets[k]];
+    }
+    // sum_j alpha_j (P(j, k) - P(j, 0)) = 0 for k >= 1; sum_j alpha_j = 1.
+    Eigen::MatrixXd M(m, m);
+    Eigen::VectorXd r = Eigen::VectorXd::Zero(long(m));
+    for (std::size_t j = 0; j < m; ++j) {
+      M(0, long(j)) = 1.0;
+      for (std::size_t k = 1; k < m; ++k) M(long(k), long(j)) = P(long(j), long(k)) - P(long(j), 0);
+    }
+    r[0] = 1.0;
+    const Eigen::VectorXd alpha = M.fullPivLu().solve(r);
+    for (std::size_t j = 0; j < m; ++j) share[j] = alpha[long(j)];
+  }
+  out.flux.assign(o.edges(), 0.0);
+  out.flux[std::size_t(o.inlet)] = -Q;
+  for (std::size_t j = 0; j < outlets.size(); ++j) out.flux[outlets[j]] = share[j] * Q;
+  const std::vector<double> psi = solve(out.flux);
+  const std::vector<double> P = opening_pressures(psi, out.flux);
+  out.pressure_drop_over_mu = P[std::size_t(o.inlet)] - P[outlets[0]];
+
+  // Nodal velocities.
+  FlowGrid& G = out.grid;
+  for (long i = 0; i < nx; ++i) G.axis[0].push_back(pos(i, 0).x());
+  for (long j = 0; j < ny; ++j) G.axis[1].push_back(pos(0, j).y());
+  G.axis[2] = {0.0};
+  G.u.assign(N, Vec3::Zero());
+  for (long j = 0; j < ny; ++j)
+    for (long i = 0; i < nx; ++i) {
+      const std::size_t n = id(i, j);
+      if (role[n] == 1) {
+        G.u[n] = Vec3((psi[id(i, j + 1)] - psi[id(i, j - 1)]) / (2 * h), -(psi[id(i + 1, j)] - psi[id(i - 1, j)]) / (2 * h), 0.0);
+      } else if (role[n] == 2 && o.open[std::size_t(edge[n])]) {
+        const std::size_t k = std::size_t(edge[n]);
+        const double s = (pos(i, j) - o.a(k)).norm() / o.length(k);
+        const double w = o.length(k);
+        const Vec2 un = out.flux[k] / w * 6.0 * s * (1.0 - s) * o.outward_normal(k);
+        G.u[n] = Vec3(un.x(), un.y(), 0.0);
+      }
+    }
+  G.path = "(solved: stokes 2D on the outline)";
+  return out;
+}
+
+}  // namespace stokesian

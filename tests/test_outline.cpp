@@ -1,0 +1,197 @@
+// Outline channels (issue 17; engine/core/outline.hpp, trees/walls.hpp, docs/channels.md).
+//
+// References, each independent of the code under test:
+//   - a straight outline carries plane Poiseuille flow, u = (3/2) U (1 - (2 eta / H)^2), with the
+//     pressure drop 12 mu U L / H^2 (closed form);
+//   - mass conservation: the flux through every cross-section equals the inlet's;
+//   - symmetry: a symmetric T splits the flux evenly; an asymmetric one in the inverse ratio of its
+//     outlet arms' lengths (the Poiseuille resistance 12 mu L / w^3 of each arm, to within the
+//     junction's local correction, a fraction of a width);
+//   - geometry: wall particles outside the fluid, not overlapping, covering every wall edge, none
+//     on an opening.
+#include <doctest/doctest.h>
+
+#include "engine/core/channel.hpp"
+#include "engine/core/outline.hpp"
+#include "io/scene_toml.hpp"
+#include "trees/walls.hpp"
+
+#include <cmath>
+#include <string>
+
+using namespace stokesian;
+
+namespace {
+
+ChannelParams outline(std::vector<std::array<double, 2>> v, std::vector<long> openings, long inlet) {
+  ChannelParams c;
+  c.kind = ChannelParams::Kind::outline;
+  c.outline = std::move(v);
+  c.openings = std::move(openings);
+  c.inlet = inlet;
+  c.depth = 2.0;
+  return c;
+}
+
+// Straight channel [0, 40] x [-5, 5], inlet at x = 0 (edge 3), outlet at x = 40 (edge 1).
+ChannelParams straight() { return outline({{0, -5}, {40, -5}, {40, 5}, {0, 5}}, {1, 3}, 3); }
+
+// T: stem x in [-5, 5], y in [-30, 0] (inlet at its foot, edge 0); bar y in [0, 10] from x = -left
+// to x = right (outlets at its ends, edges 3 and 5).
+ChannelParams tee(double left, double right) {
+  return outline({{-5, -30}, {5, -30}, {5, 0}, {right, 0}, {right, 10}, {-left, 10}, {-left, 0}, {-5, 0}}, {0, 3, 5}, 0);
+}
+
+// 4:1 contraction: [0, 60] x [-20, 20] into [60, 120] x [-5, 5]; inlet edge 7, outlet edge 3.
+ChannelParams contraction() {
+  return outline({{0, -20}, {60, -20}, {60, -5}, {120, -5}, {120, 5}, {60, 5}, {60, 20}, {0, 20}}, {3, 7}, 7);
+}
+
+Vec3 node_u(const FlowGrid& g, std::size_t i, std::size_t j) { return g.u[g.index(i, j, 0)]; }
+
+}  // namespace
+
+TEST_CASE("outline flow: a straight outline carries plane Poiseuille flow and its pressure drop") {
+  const Outline o = make_outline(straight());
+  double prev = 0;
+  for (double h : {1.0, 0.5, 0.25}) {
+    const OutlineFlow f = solve_outline_flow(o, 1.0, h);
+    double err = 0;
+    for (std::size_t j = 0; j < f.grid.axis[1].size(); ++j)
+      for (std::size_t i = 0; i < f.grid.axis[0].size(); ++i) {
+        const double y = f.grid.axis[1][j], exact = std::abs(y) < 5 ? 1.5 * (1 - y * y / 25) : 0.0;
+        err = std::max(err, (node_u(f.grid, i, j) - Vec3(exact, 0, 0)).norm());
+      }
+    MESSAGE("h = " << h << ": max |u - u_Poiseuille| = " << err << ", dp/mu = " << f.pressure_drop_over_mu);
+    // Central differences of psi: error (h^2 / 6) |psi'''| = 0.02 h^2 here (psi itself is exact).
+    CHECK(err <= 0.02 * h * h * (1 + 1e-6));
+    if (prev > 0) CHECK(prev / err == doctest::Approx(4.0).epsilon(0.02));
+    prev = err;
+    CHECK(f.pressure_drop_over_mu == doctest::Approx(12.0 * 1.0 * 40.0 / 100.0).epsilon(1e-9));
+    CHECK(f.flux[3] == doctest::Approx(-10.0));
+    CHECK(f.flux[1] == doctest::Approx(10.0));
+  }
+  // As a field: Faxen data from the grid (trilinear), zero outside and at the walls.
+  const TabulatedFlow tf(std::make_shared<FlowGrid>(solve_outline_flow(o, 1.0, 0.25).grid));
+  Mat3 G;
+  const Vec3 u = tf.velocity(Vec3(20.0, 2.0, 0.0), &G);
+  CHECK(u.x() == doctest::Approx(1.5 * (1 - 4.0 / 25)).epsilon(2e-3));
+  CHECK(G(0, 1) == doctest::Approx(-1.5 * 2 * 2.0 / 25).epsilon(1e-2));
+  CHECK(tf.velocity(Vec3(20.0, 5.0, 0.0)).norm() == 0.0);
+  CHECK(tf.velocity(Vec3(20.0, 6.0, 0.0)).norm() == 0.0);
+}
+
+TEST_CASE("outline flow: equal outlet pressures split a T by its arms' resistance") {
+  const OutlineFlow sym = solve_outline_flow(make_outline(tee(40, 40)), 1.0, 0.5);
+  CHECK(sym.flux[0] == doctest::Approx(-10.0));
+  CHECK(sym.flux[3] == doctest::Approx(5.0).epsilon(1e-6));
+  CHECK(sym.flux[5] == doctest::Approx(5.0).epsilon(1e-6));
+  // Arms of 80 and 160 a from the stem's axis: resistance ratio 2 (long-arm limit).
+  const OutlineFlow asym = solve_outline_flow(make_outline(tee(160, 80)), 1.0, 0.5);
+  const double ratio = asym.flux[3] / asym.flux[5];
+  MESSAGE("T with arms 80 and 160 a: flux ratio " << ratio << " (resistance network: 2)");
+  CHECK(asym.flux[3] + asym.flux[5] == doctest::Approx(10.0));
+  CHECK(ratio == doctest::Approx(2.0).epsilon(0.02));
+}
+
+TEST_CASE("outline flow: mass is conserved through a 4:1 contraction") {
+  // Flux of the nodal velocities (trapezoid) across x = const. Where the flow is fully developed
+  // (width w) the central-difference velocities lose (h^2/6)|u''| and the trapezoid (h^2/12)|u'|
+  // jump: together 3 (h/w)^2 Q, both second order.
+  const Outline o = make_outline(contraction());
+  const OutlineFlow f = solve_outline_flow(o, 1.0, 0.5), f2 = solve_outline_flow(o, 1.0, 0.25);  // Q = 40
+  auto flux = [](const OutlineFlow& of, double x) {
+    const FlowGrid& g = of.grid;
+    const std::size_t i = std::size_t(std::lround((x - g.axis[0].front()) / of.h));
+    double q = 0;
+    for (std::size_t j = 0; j + 1 < g.axis[1].size(); ++j) q += 0.5 * of.h * (node_u(g, i, j).x() + node_u(g, i, j + 1).x());
+    return q;
+  };
+  for (double x : {10.0, 59.0, 61.0, 100.0}) {
+    const double e1 = std::abs(flux(f, x) - 40.0), e2 = std::abs(flux(f2, x) - 40.0);
+    MESSAGE("x = " << x << ": flux error " << e1 << " (h = 0.5), " << e2 << " (h = 0.25)");
+    CHECK(e1 / e2 > 3.5);
+    if (x == 10.0) CHECK(e1 <= 3 * std::pow(0.5 / 40.0, 2) * 40.0 * 1.05);
+    if (x == 100.0) CHECK(e1 <= 3 * std::pow(0.5 / 10.0, 2) * 40.0 * 1.05);
+  }
+  // The contraction adds to the two straight channels' Poiseuille drops (entrance losses).
+  const double straight_drops = 12.0 * 40.0 * 60.0 / std::pow(40.0, 3) + 12.0 * 40.0 * 60.0 / std::pow(10.0, 3);
+  MESSAGE("contraction: dp/mu = " << f.pressure_drop_over_mu << ", straight channels' sum " << straight_drops);
+  CHECK(f.pressure_drop_over_mu > straight_drops);
+  CHECK(f.pressure_drop_over_mu < 1.1 * straight_drops);
+  // Refinement changes the drop little (second order away from the corners' singularities).
+  const double fine = f2.pressure_drop_over_mu;
+  CHECK(std::abs(fine - f.pressure_drop_over_mu) < 5e-3 * fine);
+}
+
+TEST_CASE("outline walls: outside the fluid, no overlaps, every wall edge covered, openings free") {
+  for (const ChannelParams& base : {tee(40, 40), contraction()}) {
+    for (long layers : {1L, 2L}) {
+      ChannelParams c = base;
+      c.layers = layers;
+      const Outline o = make_outline(c);
+      const std::vector<Vec3> w = wall_particles(c, Domain{});
+      REQUIRE(!w.empty());
+      for (std::size_t i = 0; i < w.size(); ++i) {
+        const Vec2 p(w[i].x(), w[i].y());
+        CHECK(w[i].z() == 0.0);
+        CHECK(!o.contains(p));
+        CHECK(o.distance(p) >= c.radius - 1e-9);
+        for (std::size_t j = i + 1; j < w.size(); ++j) CHECK((w[i] - w[j]).norm() >= 2 * c.radius + 0.5 * c.gap - 1e-9);
+      }
+      // Every point of a wall edge has a wall-particle centre within sqrt(r^2 + s^2) (a row of
+      // spacing at most 2 s at distance r); no opening has one within r of its interior.
+      for (std::size_t k = 0; k < o.edges(); ++k)
+        for (int q = 0; q <= 100; ++q) {
+          const Vec2 p = o.a(k) + (o.b(k) - o.a(k)) * (q / 100.0);
+          double d = 1e300;
+          for (const Vec3& x : w) d = std::min(d, (Vec2(x.x(), x.y()) - p).norm());
+          if (!o.open[k]) CHECK(d <= std::sqrt(c.radius * c.radius + c.spacing() * c.spacing()));
+          else if (q > 0 && q < 100 && std::min(q, 100 - q) * o.length(k) / 100.0 > 2 * c.radius) CHECK(d >= c.radius - 1e-9);
+        }
+    }
+  }
+}
+
+TEST_CASE("outline scenes: monolayer fill, resolved round trip, errors name the key") {
+  const std::string base = R"(
+[walls]
+kind = "outline"
+outline = [[0, 0], [50, 0], [50, -40], [70, -40], [70, 0], [100, 0], [100, 20], [0, 20]]
+openings = [2, 5, 7]
+inlet = 7
+[flow]
+kind = "poiseuille"
+mean_velocity = 1.0
+)";
+  const Scene s = io::parse_scene(base + "[particles]\ngenerate = \"random\"\ncount = 50\nseed = 4\n", "tj.toml");
+  REQUIRE(s.interior_count() == 50);
+  const Outline o = make_outline(s.walls);
+  for (std::size_t i = 0; i < s.interior_count(); ++i) {
+    CHECK(s.positions[i].z() == 0.0);
+    CHECK(o.contains(Vec2(s.positions[i].x(), s.positions[i].y())));
+    CHECK(o.distance(Vec2(s.positions[i].x(), s.positions[i].y())) >= 1.0);
+  }
+  CHECK(s.wall_count > 100);
+  CHECK(s.flow.grid);
+  const Scene again = io::parse_scene(s.toml, "again.toml");
+  CHECK(again.toml == s.toml);
+  CHECK(again.positions.size() == s.positions.size());
+  CHECK(cross_section_area(s.walls, s.domain) == doctest::Approx(40.0));  // inlet 20 a x depth 2 a
+
+  CHECK_THROWS_WITH(io::parse_scene(base + "[particles]\npositions = [[60.0, 30.0, 0.0]]\n", "tj.toml"),
+                    doctest::Contains("lies outside the fluid region"));
+  std::string oblique = base;
+  oblique.replace(oblique.find("[50, -40]"), 9, "[45, -40]");
+  CHECK_THROWS_WITH(io::parse_scene(oblique + "[particles]\npositions = [[10.0, 10.0, 0.0]]\n", "tj.toml"),
+                    doctest::Contains("[flow] kind: the flow through an outline is solved for edges parallel to x or y; edge 1"));
+  std::string bad_inlet = base;
+  bad_inlet.replace(bad_inlet.find("inlet = 7"), 9, "inlet = 1");
+  CHECK_THROWS_WITH(io::parse_scene(bad_inlet + "[particles]\npositions = [[10.0, 10.0, 0.0]]\n", "tj.toml"),
+                    doctest::Contains("[walls] outline: the inlet (edge 1) must be one of the openings"));
+  CHECK_THROWS_WITH(io::parse_scene(base + "[particles]\ngenerate = \"random\"\ncount = 5000\n", "tj.toml"),
+                    doctest::Contains("[particles] count: only"));
+  CHECK_THROWS_WITH(io::parse_scene("[domain]\nkind = \"periodic\"\nbox = [10, 10, 10]\n" + base +
+                                        "[particles]\npositions = [[10.0, 10.0, 0.0]]\n", "tj.toml"),
+                    doctest::Contains("\"outline\" is for open domains"));
+}
