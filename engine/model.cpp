@@ -148,6 +148,9 @@ ResolvedModel resolve_model(const Scene& s) {
   m.brownian = s.fluid.kT > 0.0;
   m.fixed_particles = std::any_of(s.fixed.begin(), s.fixed.end(), [](char c) { return c != 0; });
   m.reasons.push_back(m.brownian ? "fluid.kT > 0: Brownian motion on" : "fluid.kT = 0: athermal");
+  if (s.walls.kind == ChannelParams::Kind::outline)
+    m.reasons.push_back("[walls] outline: a monolayer at z = 0; the motion out of the plane (U_z, Omega_x, Omega_y) is "
+                        "removed (exact for coplanar spheres, whose in- and out-of-plane motions decouple; docs/channels.md)");
 
   // Level and solver.
   if (s.hydro.model == HydroModel::auto_) {

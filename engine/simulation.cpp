@@ -60,7 +60,14 @@ Simulation::Simulation(Scene scene)
       hydro_(model_, scene_.fluid.viscosity, make_ambient_field(scene_.flow, scene_.walls, scene_.domain), scene_.hydro.tolerance,
              lubrication::near_field_params(scene_.hydro, model_.moments), radius_ratio(scene_.radii)),
       integrator_(integrators().find(model_.integrator)->make(scene_.time)),
-      observers_(make_observers(scene_, model_)) {}
+      observers_(make_observers(scene_, model_)),
+      monolayer_(scene_.walls.kind == ChannelParams::Kind::outline) {}
+
+void Simulation::keep_in_plane(HydroResult& r) const {
+  if (!monolayer_) return;
+  for (Vec3& u : r.U) u.z() = 0.0;
+  for (Vec3& w : r.Omega) w.x() = w.y() = 0.0;
+}
 
 State Simulation::initial_state() const {
   State s;
@@ -169,6 +176,7 @@ Evaluation Simulation::evaluate_checked(const State& s, const std::vector<Vec3>&
   const auto t0 = std::chrono::steady_clock::now();
   try {
     if (solve) ev.hydro = hydro_.solve(c, s.fixed, ev.force, ev.torque, noise);
+    if (solve) keep_in_plane(ev.hydro);
   } catch (const PhysicsError& e) {
     throw PhysicsError(at() + ": " + e.what() + closest_pairs(x, s.radius, domain));
   }
@@ -203,7 +211,9 @@ HydroResult Simulation::noise_response(const State& s, const std::vector<Vec3>& 
   const Configuration c{x, s.radius, domain};
   try {
     hydro_.prepare(c);  // the stage's set-up, kept from its evaluation
-    return hydro_.noise_velocity(c, s.fixed, xi);
+    HydroResult r = hydro_.noise_velocity(c, s.fixed, xi);
+    keep_in_plane(r);
+    return r;
   } catch (const PhysicsError& e) {
     throw PhysicsError("step " + std::to_string(s.step) + ": " + e.what() + closest_pairs(x, s.radius, domain));
   }
@@ -220,8 +230,10 @@ std::vector<Vec3> Simulation::brownian_displacement(const State& s, double dt, R
   } else {
     dX = hydro_.brownian_displacement(s.position, s.radius, scene_.fluid.kT, dt, rng, s.domain);
   }
-  for (std::size_t i = 0; i < dX.size(); ++i)
+  for (std::size_t i = 0; i < dX.size(); ++i) {
     if (!s.fixed.empty() && s.fixed[i]) dX[i] = Vec3::Zero();
+    if (monolayer_) dX[i].z() = 0.0;
+  }
   return dX;
 }
 

@@ -96,6 +96,15 @@ class Simulation final : public Dynamics {
   TaskGraph::Mode task_mode_ = TaskGraph::Mode::automatic;
   PhaseTimes phases_;
   std::optional<std::mt19937_64> legacy_noise_;  // set while continuing a run of 0.1.0 (see run())
+  // Outline channels: a monolayer at z = 0. The motion out of the plane (U_z, Omega_x, Omega_y) is
+  // removed from every solve and Brownian displacement. For coplanar spheres the mirror symmetry
+  // z -> -z decouples the in-plane motions (U_x, U_y, Omega_z) from the out-of-plane ones in the
+  // mobility, resistance and near field alike, so the in-plane block is the constrained system's
+  // mobility itself: deterministic velocities are unchanged (their out-of-plane part is zero), the
+  // Brownian displacement keeps the covariance 2 kT M_inplane dt, and the midpoint stages stay in
+  // the plane, so Fixman's drift is that of the in-plane dynamics (docs/channels.md, "Outlines").
+  bool monolayer_ = false;
+  void keep_in_plane(HydroResult& r) const;
 };
 
 }  // namespace stokesian
