@@ -51,6 +51,28 @@ Registry<ParticleOutputEntry> make_particle_outputs() {
          [](const State&, const Evaluation& ev, Frame& f) {
            f.particles["stresslet"] = Field{{6}, six_per_particle(ev.hydro.S), units::energy, false};
          }});
+  // Per-particle stress ([L24] eqs. 2.36-2.37 per particle; method note P15, P16): the particle's
+  // share of the bulk stress of engine/stress.hpp (hydrodynamic and interparticle parts) over its
+  // own volume, sigma_i = (S^H_i - sum_j (1/2) r_ij F_ij^T) / (4/3 pi a_i^3), S^H_i = -S_i the
+  // stresslet of the fluid's traction on it (the solve returns S_i, exerted on the fluid); the
+  // pair virial replaces [L24]'s origin-dependent -x F^P. An isolated sphere in a straining flow
+  // has 5 mu E_inf (Einstein). The Brownian stresslet is a mean over steps, not a per-frame
+  // per-particle value, and is not included.
+  r.add({"particle_stress", {"particle_stress", {6}, kSymmetricComponents, units::stress},
+         [](const ResolvedModel& m) { return has_stresslet(m.moments); }, "moments = \"FTS\"",
+         [](const State& s, const Evaluation& ev, Frame& f) {
+           std::vector<double> v;
+           v.reserve(6 * s.size());
+           for (std::size_t i = 0; i < s.size(); ++i) {
+             Mat3 m = -from_vec5(ev.hydro.S[i]);
+             if (!ev.pair.particle_virial.empty()) m -= ev.pair.particle_virial[i];
+             m /= 4.0 / 3.0 * kPi * std::pow(s.radius[i], 3);
+             const double c[6] = {m(0, 0), 0.5 * (m(0, 1) + m(1, 0)), 0.5 * (m(0, 2) + m(2, 0)), m(1, 1),
+                                  0.5 * (m(1, 2) + m(2, 1)), m(2, 2)};
+             v.insert(v.end(), c, c + 6);
+           }
+           f.particles["particle_stress"] = Field{{6}, v, units::stress, false};
+         }});
   return r;
 }
 

@@ -242,7 +242,12 @@ void accumulate(const Law& law, double cutoff_gap, const std::vector<trees::Neig
     force[p.j] -= F;
     if (totals) {
       totals->energy += e[k].U;
-      totals->virial += p.r * F.transpose();
+      const Mat3 w = p.r * F.transpose();
+      totals->virial += w;
+      if (totals->per_particle) {
+        totals->particle_virial[p.i] += 0.5 * w;
+        totals->particle_virial[p.j] += 0.5 * w;
+      }
     }
   }
 }
@@ -261,6 +266,8 @@ void add_pair_forces(const std::vector<PairForceParams>& laws, const std::vector
                                 std::to_string(radius.size()) + " radii");
   if (force.empty()) force.assign(x.size(), Vec3::Zero());
   if (force.size() != x.size()) throw std::invalid_argument("add_pair_forces: force has wrong size");
+  if (totals && totals->per_particle && totals->particle_virial.size() != x.size())
+    totals->particle_virial.assign(x.size(), Mat3::Zero());
   if (laws.empty() || x.size() < 2) return;
 
   double a_max = 0.0;

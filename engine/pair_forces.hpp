@@ -148,6 +148,10 @@ EnergyDerivative pair_energy(const PairForceParams& p, double cutoff_gap, double
 struct PairForceTotals {
   double energy = 0.0;            // sum over pairs of the shifted pair energies [kT]
   Mat3 virial = Mat3::Zero();     // sum over pairs of r_ij F_i^T [kT]
+  // Per particle: half the virial of each of its pairs, sum_j (1/2) r_ij F_ij^T [kT] (sums to
+  // `virial`), filled when `per_particle` is set.
+  bool per_particle = false;
+  std::vector<Mat3> particle_virial;
 };
 
 // Adds the forces of all laws on all pairs (one trees::neighbor_pairs search with the largest

@@ -122,6 +122,7 @@ Evaluation Simulation::evaluate_checked(const State& s, const std::vector<Vec3>&
       if (!fe.empty()) ev.force[i] += fe.size() == 1 ? fe[0] : fe[i];
       if (!te.empty()) ev.torque[i] += te.size() == 1 ? te[0] : te[i];
     }
+    ev.pair.per_particle = has_stresslet(model_.moments);  // the per-particle stress (engine/observers.cpp)
     if (!scene_.forces.pair.empty()) forces::add_pair_forces(scene_.forces.pair, x, s.radius, domain, ev.force, &ev.pair);
   });
   // The solver's set-up phases (far-field operator, near-field assembly, factorisation).

@@ -421,3 +421,62 @@ TEST_CASE("[brownian] stress_every: a frame records the mean of the samples of t
   CHECK(none.back().observables.count("brownian_samples") == 0);
   CHECK((stress_of(none.back(), "stress_brownian") - stress_of(fine[0], "stress_brownian")).norm() == 0.0);
 }
+
+namespace {
+
+// Particle i's particle_stress of frame f as a matrix.
+Mat3 particle_stress(const Frame& f, std::size_t i) {
+  const auto& v = f.particles.at("particle_stress").values;
+  const double* c = v.data() + 6 * i;
+  Mat3 m;
+  m << c[0], c[1], c[2], c[1], c[3], c[4], c[2], c[4], c[5];
+  return m;
+}
+
+}  // namespace
+
+TEST_CASE("per-particle stress: Einstein's 5 mu E for an isolated sphere; the volume-weighted sum is the bulk stress") {
+  // Isolated sphere in planar extension (open domain): S^H = (20/3) pi mu a^3 E, so
+  // sigma = S^H / (4/3 pi a^3) = 5 mu E exactly, for every radius.
+  for (double a : {1.0, 2.5}) {
+    std::ostringstream o;
+    o << "[fluid]\nviscosity = 1.5\n[particles]\npositions = [[0.4, -1.0, 0.3]]\nradii = [" << a << "]\n"
+      << "[flow]\nkind = \"planar_extension\"\nrate = 0.7\n[hydrodynamics]\nmodel = \"far_field\"\nmoments = \"FTS\"\n";
+    const Frame f = first_frame(o.str());
+    Mat3 E = Mat3::Zero();
+    E(0, 0) = 0.7;
+    E(1, 1) = -0.7;
+    CHECK((particle_stress(f, 0) - 5.0 * 1.5 * E).norm() <= 1e-12 * 5.0 * 1.5 * E.norm());
+  }
+  // Sheared periodic suspension with a pair force, lubrication and a fixed particle: the
+  // volume-weighted particle stresses sum to V times the hydrodynamic, interparticle and fixed
+  // parts of the bulk stress (engine/stress.hpp, an independent sum over the solve's stresslets
+  // and over the pairs).
+  const std::string text = R"([domain]
+kind = "periodic"
+box = [10, 10, 10]
+[particles]
+positions = [[0.0, 0.0, 0.0], [2.1, 0.4, 0.0], [0.3, -0.2, 2.2], [4.0, 4.0, 4.0]]
+radii = [1.0, 1.2, 0.8, 1.0]
+fixed = [false, false, false, true]
+[[forces.pair]]
+kind = "repulsion"
+strength = 3.0
+decay = 10.0
+[flow]
+kind = "simple_shear"
+rate = 1.3
+[hydrodynamics]
+model = "stokesian"
+solver = "dense"
+tolerance = 1e-8
+)";
+  const Frame f = first_frame(text);
+  const double radii[4] = {1.0, 1.2, 0.8, 1.0};
+  Mat3 sum = Mat3::Zero();
+  for (std::size_t i = 0; i < 4; ++i) sum += particle_stress(f, i) * (4.0 / 3.0 * kPi * std::pow(radii[i], 3));
+  const Mat3 bulk = (stress_of(f, "stress_hydrodynamic") + stress_of(f, "stress_interparticle") + stress_of(f, "stress_fixed")) * 1000.0;
+  MESSAGE("sum_i V_i sigma_i = " << sum.row(0) << " ...; V (hydrodynamic + interparticle + fixed) = " << bulk.row(0) << " ...");
+  CHECK((sum - bulk).norm() <= 1e-10 * bulk.norm());
+  CHECK(stress_of(f, "stress_interparticle").norm() > 0.0);
+}
