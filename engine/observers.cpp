@@ -386,7 +386,7 @@ std::vector<std::unique_ptr<Observer>> make_observers(const Scene& scene, const 
 }
 
 GapSurvey survey_gaps(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain, double range,
-                      std::size_t keep) {
+                      std::size_t keep, const std::vector<char>* fixed) {
   GapSurvey out;
   out.stats.min_gap = INFINITY;
   if (x.size() < 2) return out;
@@ -394,6 +394,7 @@ GapSurvey survey_gaps(const std::vector<Vec3>& x, const std::vector<double>& a, 
     const double ai = a[std::size_t(p.i)], aj = a[std::size_t(p.j)];
     const double gap = p.dist - ai - aj;
     if (!(gap < range)) continue;
+    if (fixed && !fixed->empty() && (*fixed)[std::size_t(p.i)] && (*fixed)[std::size_t(p.j)]) continue;
     ++out.within;
     out.stats.min_gap = std::min(out.stats.min_gap, gap);
     out.stats.overlaps += gap < 0;
@@ -426,7 +427,8 @@ std::string describe_pairs(const std::vector<PairGap>& pairs) {
   return s;
 }
 
-GapStats gap_statistics(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain) {
+GapStats gap_statistics(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain,
+                        const std::vector<char>* fixed) {
   // Every gap is below the largest centre distance, which is below the diagonal of the particles'
   // bounding box (open) or of the box (periodic): past it, no pair exists (a single particle).
   Vec3 lo = x.empty() ? Vec3::Zero() : x[0], hi = lo;
@@ -436,15 +438,15 @@ GapStats gap_statistics(const std::vector<Vec3>& x, const std::vector<double>& a
   }
   const double limit = domain.periodic() ? domain.box.norm() : (hi - lo).norm();
   for (double range = kGapSearchRange;; range *= 2.0) {
-    const GapSurvey s = survey_gaps(x, a, domain, range, 0);
+    const GapSurvey s = survey_gaps(x, a, domain, range, 0, fixed);
     if (s.within > 0 || range > limit || x.size() < 2) return s.stats;
   }
 }
 
 GapSurvey survey_overlaps(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain,
-                          std::size_t keep, GapStats& stats) {
-  GapSurvey near = survey_gaps(x, a, domain, kGapSearchRange, keep);
-  stats = near.within > 0 || x.size() < 2 ? near.stats : gap_statistics(x, a, domain);
+                          std::size_t keep, GapStats& stats, const std::vector<char>* fixed) {
+  GapSurvey near = survey_gaps(x, a, domain, kGapSearchRange, keep, fixed);
+  stats = near.within > 0 || x.size() < 2 ? near.stats : gap_statistics(x, a, domain, fixed);
   // Overlapping pairs have positive depth, so the `keep` deepest pairs in range hold the `keep`
   // deepest overlapping ones: drop the rest, and restate the statistics for range 0.
   near.worst.erase(std::remove_if(near.worst.begin(), near.worst.end(), [](const PairGap& p) { return !(p.gap < 0.0); }),

@@ -54,7 +54,9 @@ std::vector<std::unique_ptr<Observer>> make_observers(const Scene& scene, const 
 
 // Surface-gap statistics: overlapping pairs, and the true smallest surface gap (searched within 1 a,
 // then in doubling ranges until a pair is found; nearest periodic image). +inf for one particle.
-GapStats gap_statistics(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain);
+// With `fixed`, pairs of two fixed particles (a wall's own spacing) are left out.
+GapStats gap_statistics(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain,
+                        const std::vector<char>* fixed = nullptr);
 
 // One pair of a gap survey: surface gap h = r - a_i - a_j [a], and the overlap depth -h as a
 // fraction of the smaller radius (negative when the pair does not overlap).
@@ -71,12 +73,12 @@ struct GapSurvey {
   long within = 0;  // pairs found in range
 };
 GapSurvey survey_gaps(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain, double range,
-                      std::size_t keep);
+                      std::size_t keep, const std::vector<char>* fixed = nullptr);
 // Both at once (output steps of a run): the overlapping pairs, as survey_gaps(x, a, domain, 0, keep)
 // returns them, and the gap statistics, as gap_statistics returns them, from one pair search
 // unless no pair lies within 1 a.
 GapSurvey survey_overlaps(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain,
-                          std::size_t keep, GapStats& stats);
+                          std::size_t keep, GapStats& stats, const std::vector<char>* fixed = nullptr);
 // "(i, j) gap h a (d of the smaller radius), ..." for messages.
 std::string describe_pairs(const std::vector<PairGap>& pairs);
 

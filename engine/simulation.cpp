@@ -137,13 +137,13 @@ Evaluation Simulation::evaluate_checked(const State& s, const std::vector<Vec3>&
   if (diagnostics && overlaps)
     g.add("diagnostics", search, [&] {
       GapStats stats;
-      *overlaps = survey_overlaps(x, s.radius, domain, kReportedPairs, stats);
+      *overlaps = survey_overlaps(x, s.radius, domain, kReportedPairs, stats, &s.fixed);
       ev.gaps = stats;
     });
   else if (diagnostics)
-    g.add("diagnostics", search, [&] { ev.gaps = gap_statistics(x, s.radius, domain); });
+    g.add("diagnostics", search, [&] { ev.gaps = gap_statistics(x, s.radius, domain, &s.fixed); });
   else if (overlaps)
-    g.add("overlaps", search, [&] { *overlaps = survey_gaps(x, s.radius, domain, 0.0, kReportedPairs); });
+    g.add("overlaps", search, [&] { *overlaps = survey_gaps(x, s.radius, domain, 0.0, kReportedPairs, &s.fixed); });
   // Overlap policy ([run] max_overlap): a pair deeper than the threshold stops the run before the
   // solve, and explains a set-up failure (factorisation) that the overlap caused.
   const double max_overlap = scene_.run.max_overlap;

@@ -250,6 +250,17 @@ steps = 10
   }
   Simulation sim(s);
   State st = sim.initial_state();
+  {
+    // min_gap leaves out the wall's own pairs (two fixed particles, 0.025-0.05 a apart here).
+    const Evaluation ev = sim.evaluate(st, st.position, 0.0, true);
+    double brute = INFINITY;
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::size_t j = i + 1; j < n; ++j)
+        if (!(s.fixed[i] && s.fixed[j])) brute = std::min(brute, (s.positions[i] - s.positions[j]).norm() - s.radii[i] - s.radii[j]);
+    REQUIRE(ev.gaps);
+    CHECK(ev.gaps->min_gap == doctest::Approx(brute).epsilon(1e-12));
+    CHECK(brute > 0.3);
+  }
   for (int k = 0; k < 10; ++k) sim.advance(st, sim.evaluate(st, st.position, 0.0, true));
   double moved = 0;
   for (std::size_t i = 0; i < ni; ++i) {
