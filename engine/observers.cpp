@@ -66,10 +66,8 @@ Registry<ParticleOutputEntry> make_particle_outputs() {
            for (std::size_t i = 0; i < s.size(); ++i) {
              Mat3 m = -from_vec5(ev.hydro.S[i]);
              if (!ev.pair.particle_virial.empty()) m -= ev.pair.particle_virial[i];
-             m /= 4.0 / 3.0 * kPi * std::pow(s.radius[i], 3);
-             const double c[6] = {m(0, 0), 0.5 * (m(0, 1) + m(1, 0)), 0.5 * (m(0, 2) + m(2, 0)), m(1, 1),
-                                  0.5 * (m(1, 2) + m(2, 1)), m(2, 2)};
-             v.insert(v.end(), c, c + 6);
+             const Vec6 c = six_components(Mat3(m / (4.0 / 3.0 * kPi * std::pow(s.radius[i], 3))));
+             v.insert(v.end(), c.data(), c.data() + 6);
            }
            f.particles["particle_stress"] = Field{{6}, v, units::stress, false};
          }});

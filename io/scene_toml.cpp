@@ -581,15 +581,14 @@ void append_walls(const Reader& R, const toml::table& pt, const toml::table& roo
       s.fixed.resize(n - w.size());
     }
   }
-  for (std::size_t i = 0; i < s.positions.size(); ++i)
-    if (!in_channel(s.walls, s.domain, s.positions[i])) {
-      std::ostringstream o;
-      const Vec3& x = s.positions[i];
-      o << "particle " << i << " at [" << x.x() << ", " << x.y() << ", " << x.z() << "] lies outside the fluid region of "
-        << "[walls] kind = \"" << name_of(s.walls.kind) << "\" (centre " << channel_centre(s.domain).transpose()
-        << "; docs/channels.md)";
-      R.fail(pt.get(key), std::string("[particles] ") + key, o.str());
-    }
+  if (const long i = first_outside_channel(s.walls, s.domain, s.positions); i >= 0) {
+    std::ostringstream o;
+    const Vec3& x = s.positions[std::size_t(i)];
+    o << "particle " << i << " at [" << x.x() << ", " << x.y() << ", " << x.z() << "] lies outside the fluid region of "
+      << "[walls] kind = \"" << name_of(s.walls.kind) << "\" (centre " << channel_centre(s.domain).transpose()
+      << "; docs/channels.md)";
+    R.fail(pt.get(key), std::string("[particles] ") + key, o.str());
+  }
   s.wall_count = w.size();
   for (const Vec3& x : w) {
     s.positions.push_back(x);
@@ -917,7 +916,9 @@ Scene parse_scene(const toml::table& root, const std::string& source) {
       try {
         const Outline o = make_outline(s.walls);
         s.flow.grid_spacing = outline_grid_spacing(o, s.flow.grid_spacing);
-        s.flow.grid = std::make_shared<FlowGrid>(solve_outline_flow(o, s.flow.mean_velocity, s.flow.grid_spacing).grid);
+        auto solved = std::make_shared<const OutlineFlow>(solve_outline_flow(o, s.flow.mean_velocity, s.flow.grid_spacing));
+        s.flow.outline = solved;
+        s.flow.grid = std::shared_ptr<const FlowGrid>(solved, &solved->grid);
       } catch (const std::invalid_argument& e) {
         R.fail(flow.contains("grid_spacing") ? flow.get("grid_spacing") : flow.get("kind"),
                flow.contains("grid_spacing") ? "[flow] grid_spacing" : "[flow] kind", e.what());

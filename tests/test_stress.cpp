@@ -39,12 +39,24 @@ Frame first_frame(const std::string& text) {
   return sim.frame(s, sim.evaluate(s, s.position, 0.0));
 }
 
-Mat3 stress_of(const Frame& f, const std::string& name) {
-  const auto& v = f.observables.at(name).values;
+// The symmetric matrix of six components xx xy xz yy yz zz.
+Mat3 symmetric_of(const double* v) {
   Mat3 m;
   m << v[0], v[1], v[2], v[1], v[3], v[4], v[2], v[4], v[5];
   return m;
 }
+
+Mat3 stress_of(const Frame& f, const std::string& name) { return symmetric_of(f.observables.at(name).values.data()); }
+
+// Simple shear at rate 2 with dense Stokesian dynamics, closing a scene text.
+const std::string kShearedDenseSD = R"([flow]
+kind = "simple_shear"
+rate = 2.0
+[hydrodynamics]
+model = "stokesian"
+solver = "dense"
+tolerance = 1e-8
+)";
 
 std::string one_sphere(double box, const std::string& flow) {
   std::ostringstream o;
@@ -155,14 +167,7 @@ radii = [1.0, 1.0, 1.0]
 kind = "repulsion"
 strength = 3.0
 decay = 20.0
-[flow]
-kind = "simple_shear"
-rate = 2.0
-[hydrodynamics]
-model = "stokesian"
-solver = "dense"
-tolerance = 1e-8
-)";
+)" + kShearedDenseSD;
   const Frame f = first_frame(text);
   const std::vector<Vec3> x{{0.0, 0.0, 0.0}, {2.05, 0.3, 0.0}, {0.2, -0.1, 2.1}};
   Mat3 W = Mat3::Zero();
@@ -425,13 +430,7 @@ TEST_CASE("[brownian] stress_every: a frame records the mean of the samples of t
 namespace {
 
 // Particle i's particle_stress of frame f as a matrix.
-Mat3 particle_stress(const Frame& f, std::size_t i) {
-  const auto& v = f.particles.at("particle_stress").values;
-  const double* c = v.data() + 6 * i;
-  Mat3 m;
-  m << c[0], c[1], c[2], c[1], c[3], c[4], c[2], c[4], c[5];
-  return m;
-}
+Mat3 particle_stress(const Frame& f, std::size_t i) { return symmetric_of(f.particles.at("particle_stress").values.data() + 6 * i); }
 
 }  // namespace
 
@@ -463,14 +462,7 @@ fixed = [false, false, false, true]
 kind = "repulsion"
 strength = 3.0
 decay = 10.0
-[flow]
-kind = "simple_shear"
-rate = 1.3
-[hydrodynamics]
-model = "stokesian"
-solver = "dense"
-tolerance = 1e-8
-)";
+)" + kShearedDenseSD;
   const Frame f = first_frame(text);
   const double radii[4] = {1.0, 1.2, 0.8, 1.0};
   Mat3 sum = Mat3::Zero();

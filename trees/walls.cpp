@@ -5,7 +5,9 @@
 #include "engine/core/random.hpp"
 
 #include <cmath>
+#include <cstdint>
 #include <sstream>
+#include <unordered_map>
 #include <stdexcept>
 
 namespace stokesian {
@@ -44,6 +46,30 @@ std::vector<double> line_sites(bool periodic, double L, double extent, double mi
   return v;
 }
 
+// Points in the plane binned on square cells of side `cell`, for "is any within d <= cell" queries.
+class PlaneBins {
+ public:
+  explicit PlaneBins(double cell) : cell_(cell) {}
+  bool any_within(const Vec2& p, double d) const {
+    const std::int64_t ix = index(p.x()), iy = index(p.y());
+    for (std::int64_t a = ix - 1; a <= ix + 1; ++a)
+      for (std::int64_t b = iy - 1; b <= iy + 1; ++b) {
+        const auto it = bins_.find(key(a, b));
+        if (it == bins_.end()) continue;
+        for (const Vec2& q : it->second)
+          if ((q - p).norm() < d) return true;
+      }
+    return false;
+  }
+  void add(const Vec2& p) { bins_[key(index(p.x()), index(p.y()))].push_back(p); }
+
+ private:
+  std::int64_t index(double v) const { return std::int64_t(std::floor(v / cell_)); }
+  static std::uint64_t key(std::int64_t a, std::int64_t b) { return (std::uint64_t(a) << 32) ^ std::uint64_t(std::uint32_t(b)); }
+  double cell_;
+  std::unordered_map<std::uint64_t, std::vector<Vec2>> bins_;
+};
+
 // Wall sites of an outline (header).
 std::vector<Vec3> outline_walls(const ChannelParams& c) {
   const Outline o = make_outline(c);
@@ -80,11 +106,11 @@ std::vector<Vec3> outline_walls(const ChannelParams& c) {
       }
     }
   std::vector<Vec3> out;
+  PlaneBins taken(min_d);
   for (const Vec2& p : sites) {
-    if (o.contains(p) || o.distance(p) < r - 1e-9) continue;
-    bool clash = false;
-    for (const Vec3& q : out) clash = clash || (Vec2(q.x(), q.y()) - p).norm() < min_d - 1e-9;
-    if (!clash) out.emplace_back(p.x(), p.y(), 0.0);
+    if (o.contains(p) || o.distance(p) < r - 1e-9 || taken.any_within(p, min_d - 1e-9)) continue;
+    taken.add(p);
+    out.emplace_back(p.x(), p.y(), 0.0);
   }
   return out;
 }
@@ -100,13 +126,14 @@ std::vector<Vec3> fill_outline(const ChannelParams& c, long count, double a, dou
   }
   RandomStream rs = RandomStream::for_purpose(seed, Purpose::placement, 2);
   std::vector<Vec3> out;
+  PlaneBins taken(2.0 * a + min_gap);
   const long max_trials = 1000 * std::max<long>(count, 1);
   for (long trial = 0; long(out.size()) < count && trial < max_trials; ++trial) {
     const Vec2 p(lo.x() + (hi.x() - lo.x()) * rs.uniform(), lo.y() + (hi.y() - lo.y()) * rs.uniform());
-    if (!o.contains(p) || o.distance(p) < a || o.distance(p, true) < a + c.gap) continue;
-    bool clash = false;
-    for (const Vec3& q : out) clash = clash || (Vec2(q.x(), q.y()) - p).norm() < 2.0 * a + min_gap;
-    if (!clash) out.emplace_back(p.x(), p.y(), 0.0);
+    if (!o.contains(p) || o.distance(p) < a || o.distance(p, true) < a + c.gap || taken.any_within(p, 2.0 * a + min_gap))
+      continue;
+    taken.add(p);
+    out.emplace_back(p.x(), p.y(), 0.0);
   }
   if (long(out.size()) < count) {
     std::ostringstream e;

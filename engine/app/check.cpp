@@ -402,9 +402,9 @@ int check(Simulation& sim, const CheckOptions& opt, std::FILE* out) {
   if (s.flow.kind != FlowParams::Kind::none) {
     char pe[96] = "";
     if (s.flow.peclet != 0.0) std::snprintf(pe, sizeof pe, " (from peclet %.4g = 6 pi mu a^3 rate / kT)", s.flow.peclet);
-    if (s.flow.kind == FlowParams::Kind::poiseuille && s.walls.kind == ChannelParams::Kind::outline) {
+    if (s.flow.kind == FlowParams::Kind::poiseuille && s.walls.kind == ChannelParams::Kind::outline && s.flow.outline) {
       const Outline o = make_outline(s.walls);
-      const OutlineFlow f = solve_outline_flow(o, s.flow.mean_velocity, s.flow.grid_spacing);
+      const OutlineFlow& f = *s.flow.outline;  // solved when the scene was read
       std::fprintf(out, "  ambient flow: pressure-driven 2D Stokes flow through the outline (solved on a %zu x %zu grid of "
                    "spacing %.4g a, %zu fluid nodes), inlet mean velocity %.4g a/time, (p_in - p_out)/mu = %.4g /time; outlets:",
                    f.grid.axis[0].size(), f.grid.axis[1].size(), f.h, f.fluid_nodes, s.flow.mean_velocity, f.pressure_drop_over_mu);

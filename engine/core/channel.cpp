@@ -15,10 +15,21 @@ bool in_channel(const ChannelParams& c, const Domain& d, const Vec3& x) {
     case ChannelParams::Kind::plane: return r.y() > 0.0;
     case ChannelParams::Kind::slit: return std::abs(r.y()) < 0.5 * c.height;
     case ChannelParams::Kind::duct: return std::abs(r.y()) < 0.5 * c.height && std::abs(r.z()) < 0.5 * c.width;
-    case ChannelParams::Kind::outline:
-      return std::abs(x.z()) < 0.5 * c.depth && make_outline(c).contains(Vec2(x.x(), x.y()));
+    case ChannelParams::Kind::outline: return first_outside_channel(c, d, {x}) < 0;
   }
   return true;
+}
+
+long first_outside_channel(const ChannelParams& c, const Domain& d, const std::vector<Vec3>& x) {
+  if (c.kind == ChannelParams::Kind::outline) {
+    const Outline o = make_outline(c);
+    for (std::size_t i = 0; i < x.size(); ++i)
+      if (!(std::abs(x[i].z()) < 0.5 * c.depth && o.contains(Vec2(x[i].x(), x[i].y())))) return long(i);
+    return -1;
+  }
+  for (std::size_t i = 0; i < x.size(); ++i)
+    if (!in_channel(c, d, x[i])) return long(i);
+  return -1;
 }
 
 double cross_section_area(const ChannelParams& c, const Domain& d) {
@@ -206,8 +217,8 @@ void TabulatedFlow::sample(const std::vector<Vec3>& x, FlowSample& out) const {
 std::shared_ptr<const AmbientField> make_ambient_field(const FlowParams& f, const ChannelParams& c, const Domain& d) {
   if (f.kind == FlowParams::Kind::poiseuille && c.kind == ChannelParams::Kind::outline) {
     if (f.grid) return std::make_shared<TabulatedFlow>(f.grid);  // solved when the scene was read
-    auto g = std::make_shared<FlowGrid>(solve_outline_flow(make_outline(c), f.mean_velocity, f.grid_spacing).grid);
-    return std::make_shared<TabulatedFlow>(std::move(g));
+    auto solved = std::make_shared<const OutlineFlow>(solve_outline_flow(make_outline(c), f.mean_velocity, f.grid_spacing));
+    return std::make_shared<TabulatedFlow>(std::shared_ptr<const FlowGrid>(solved, &solved->grid));
   }
   if (f.kind == FlowParams::Kind::poiseuille) return std::make_shared<ChannelFlow>(c, d, f.mean_velocity);
   if (f.kind == FlowParams::Kind::tabulated) {

@@ -27,6 +27,7 @@
 #include "engine/core/flow.hpp"
 
 #include <memory>
+#include <vector>
 
 namespace stokesian {
 
@@ -35,6 +36,9 @@ inline Vec3 channel_centre(const Domain& d) { return d.periodic() ? Vec3(0.5 * d
 
 // Whether the point x lies in the fluid region (strictly inside the walls' boundary).
 bool in_channel(const ChannelParams& c, const Domain& d, const Vec3& x);
+// The first of the points outside the fluid region, or -1 when all are inside (the geometry built
+// once for all of them).
+long first_outside_channel(const ChannelParams& c, const Domain& d, const std::vector<Vec3>& x);
 
 // Cross-section normal to the flow [a^2]: H x (box z edge, or `depth` in open domains) for a slit,
 // H W for a duct; 0 for a plane wall (no cross-section).

@@ -87,12 +87,16 @@ struct FlowGrid {
   }
 };
 
+struct OutlineFlow;  // engine/core/outline.hpp
+
 struct FlowParams {
   enum class Kind { none, simple_shear, planar_extension, poiseuille, tabulated } kind = Kind::none;
   std::shared_ptr<const FlowGrid> grid;  // tabulated: the field
   double rate = 0.0;  // shear or extension rate [1/time]
   double mean_velocity = 0.0;  // poiseuille: mean velocity U over the channel's (outline: inlet's) cross-section [a/time]
   double grid_spacing = 0.0;   // poiseuille through an outline: spacing of the 2D Stokes grid [a] (0 = automatic)
+  // poiseuille through an outline: the flow solved when the scene was read (`grid` points into it)
+  std::shared_ptr<const OutlineFlow> outline;
   // Peclet number Pe = 6 pi mu a^3 rate / kT (a = 1, the reference radius; docs/rheology.md), when
   // the scene gave it instead of `rate` (0 = not given); `rate` then holds Pe kT / (6 pi mu).
   double peclet = 0.0;
