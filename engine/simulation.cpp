@@ -61,7 +61,9 @@ Simulation::Simulation(Scene scene)
              lubrication::near_field_params(scene_.hydro, model_.moments), radius_ratio(scene_.radii)),
       integrator_(integrators().find(model_.integrator)->make(scene_.time)),
       observers_(make_observers(scene_, model_)),
-      monolayer_(scene_.walls.kind == ChannelParams::Kind::outline) {}
+      monolayer_(scene_.walls.kind == ChannelParams::Kind::outline) {
+  if (scene_.inflow.enabled) inflow_.emplace(scene_);
+}
 
 void Simulation::keep_in_plane(HydroResult& r) const {
   if (!monolayer_) return;
@@ -79,6 +81,7 @@ State Simulation::initial_state() const {
   s.step = scene_.time.start_step;
   s.time = scene_.time.start_time;
   s.rng_state = kNoiseStreams;
+  if (inflow_) inflow_->initialise(s);
   return s;
 }
 
@@ -269,10 +272,11 @@ void Simulation::advance(State& s, const Evaluation& ev) {
 
 RunHeader Simulation::header() const {
   RunHeader h;
-  h.particles = scene_.positions.size();
+  h.particles = inflow_ ? inflow_->slots() + scene_.wall_count : scene_.positions.size();
   h.domain = scene_.domain;
   h.sheared_box = strain_rate_ != 0.0;
   for (const auto& o : observers_) o->declare(h.particle_fields);
+  if (inflow_) h.particle_fields.push_back({"id", {}, {}, "", true});  // -1: an empty slot (engine/inflow.hpp)
   h.scene_toml = scene_.toml;
   h.model = model_.describe();
   h.model_key = model_.key().text();
@@ -287,6 +291,12 @@ Frame Simulation::frame(const State& s, const Evaluation& ev) const {
   f.shear_strain = s.domain.shear_strain;
   for (const auto& o : observers_) o->observe(s, ev, f);
   return f;
+}
+
+Frame Simulation::frame_of_present(const State& s, const Evaluation& ev) const {
+  if (!inflow_) return frame(s, ev);
+  const std::vector<std::size_t> idx = inflow_->present(s);
+  return inflow_->expand(frame(Inflow::compact(s, idx), ev), s, idx);
 }
 
 bool Simulation::samples_brownian_stress(std::int64_t step) const {
@@ -344,7 +354,16 @@ long Simulation::run(State& s, OutputSink& out, const RunControl& control) {
     s = std::move(good);
     return RunStopped(o.str(), s.step, s.step);
   };
+  // Open channels: the solvers and the integrator see only the present particles (view), whose
+  // results go back to their slots in s (engine/inflow.hpp).
+  std::vector<std::size_t> slots;
+  State view;
   for (;;) {
+    if (inflow_) {
+      slots = inflow_->present(s);
+      view = Inflow::compact(s, slots);
+    }
+    State& cur = inflow_ ? view : s;
     const bool output_step = !frame_done && frame_step(s.step);
     GapSurvey overlaps;
     Evaluation ev;
@@ -352,7 +371,7 @@ long Simulation::run(State& s, OutputSink& out, const RunControl& control) {
       // The deterministic solve at the state is needed for its frame, and by integrators that
       // read it (fixman with noise solves with F + xi itself: one solve per step saved).
       const bool solve = output_step || integrator_->reads_start_solve(model_.brownian);
-      ev = evaluate_checked(s, s.position, 0.0, output_step, &overlaps, nullptr, solve);
+      ev = evaluate_checked(cur, cur.position, 0.0, output_step, &overlaps, nullptr, solve);
     } catch (const RunStopped&) {
       throw;
     } catch (const PhysicsError& e) {
@@ -374,13 +393,15 @@ long Simulation::run(State& s, OutputSink& out, const RunControl& control) {
                      describe_pairs(overlaps.worst).c_str(), why);
     }
     if (output_step) {
-      Frame f = frame(s, ev);
+      Frame f = inflow_ ? inflow_->expand(frame(cur, ev), s, slots) : frame(s, ev);
       out.record(f);
       latest = std::move(f);
       have_latest = true;
       // The frame has consumed the sums over the steps since the previous one.
-      s.brownian_samples = 0;
-      s.brownian_stresslet_sum.setZero();
+      for (State* st : {&s, &cur}) {
+        st->brownian_samples = 0;
+        st->brownian_stresslet_sum.setZero();
+      }
     }
     frame_done = false;
     const bool at_end = s.step >= last || (control.max_steps >= 0 && taken >= control.max_steps);
@@ -400,7 +421,12 @@ long Simulation::run(State& s, OutputSink& out, const RunControl& control) {
     noise_before = legacy_noise_;
     ev.sample_brownian_stress = samples_brownian_stress(s.step);
     try {
-      advance(s, ev);
+      advance(cur, ev);
+      if (inflow_) {
+        const double dt_used = view.time - s.time;
+        Inflow::scatter(view, slots, s);
+        inflow_->exchange(s, dt_used, scene_.seed);
+      }
     } catch (const PhysicsError& e) {
       throw stop(e);
     }

@@ -9,6 +9,7 @@
 #include "engine/core/task_graph.hpp"
 #include "engine/dynamics.hpp"
 #include "engine/hydrodynamics.hpp"
+#include "engine/inflow.hpp"
 #include "engine/integrators.hpp"
 #include "engine/model.hpp"
 #include "engine/observers.hpp"
@@ -53,6 +54,11 @@ class Simulation final : public Dynamics {
   HydroResult noise_response(const State& s, const std::vector<Vec3>& x, double t, const VecX& xi) override;
 
   Frame frame(const State& s, const Evaluation& ev) const;
+  const Inflow* inflow() const { return inflow_ ? &*inflow_ : nullptr; }
+  // The particles the solvers see: s itself, or in an open channel its present particles
+  // (Inflow::compact); frame_of_present writes a frame of them back into the slots of s.
+  State present(const State& s) const { return inflow_ ? Inflow::compact(s, inflow_->present(s)) : s; }
+  Frame frame_of_present(const State& s, const Evaluation& ev) const;
   RunHeader header() const;
 
   // Advance s by one (accepted) step; ev is the evaluation at s.position.
@@ -105,6 +111,8 @@ class Simulation final : public Dynamics {
   // the plane, so Fixman's drift is that of the in-plane dynamics (docs/channels.md, "Outlines").
   bool monolayer_ = false;
   void keep_in_plane(HydroResult& r) const;
+  // Open channels ([inflow]): run() steps the present particles (engine/inflow.hpp).
+  std::optional<Inflow> inflow_;
 };
 
 }  // namespace stokesian

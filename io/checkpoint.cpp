@@ -111,13 +111,27 @@ void write_checkpoint(const std::string& path, const Checkpoint& c) {
     for (int j = 0; j < 3; ++j)
       if (s.brownian_stresslet_sum(i, j) != 0.0)
         values["state.brownian_stresslet_sum." + std::to_string(3 * i + j)] = s.brownian_stresslet_sum(i, j);
+  std::map<std::string, std::string> strings = c.strings;
+  if (!s.id.empty()) {  // open channels (engine/inflow.hpp): slots and the inflow's tally
+    if (s.id.size() != s.size()) throw IoError(path + ": state has " + std::to_string(s.id.size()) + " ids for " +
+                                               std::to_string(s.size()) + " slots");
+    std::ostringstream ids;
+    for (std::size_t i = 0; i < s.id.size(); ++i) ids << (i ? " " : "") << s.id[i];
+    strings["state.id"] = ids.str();
+    values["state.inflow.credit"] = s.inflow.credit;
+    values["state.inflow.pending"] = s.inflow.pending;
+    values["state.inflow.next_id"] = double(s.inflow.next_id);
+    values["state.inflow.inserted"] = double(s.inflow.inserted);
+    values["state.inflow.removed"] = double(s.inflow.removed);
+    values["state.inflow.deferred"] = double(s.inflow.deferred);
+  }
   w.u64(values.size());
   for (const auto& [k, v] : values) {
     w.str(k);
     w.f64(v);
   }
-  w.u64(c.strings.size());
-  for (const auto& [k, v] : c.strings) {
+  w.u64(strings.size());
+  for (const auto& [k, v] : strings) {
     w.str(k);
     w.str(v);
   }
@@ -211,10 +225,31 @@ Checkpoint read_checkpoint(const std::string& path) {
       const int e = std::atoi(k.c_str() + std::strlen("state.brownian_stresslet_sum."));
       if (e < 0 || e > 8) throw IoError(path + ": checkpoint value " + k + " is not a stresslet entry (corrupt)");
       s.brownian_stresslet_sum(e / 3, e % 3) = it->second;
+    } else if (k == "state.inflow.credit") {
+      s.inflow.credit = it->second;
+    } else if (k == "state.inflow.pending") {
+      s.inflow.pending = it->second;
+    } else if (k == "state.inflow.next_id") {
+      s.inflow.next_id = std::int64_t(it->second);
+    } else if (k == "state.inflow.inserted") {
+      s.inflow.inserted = std::int64_t(it->second);
+    } else if (k == "state.inflow.removed") {
+      s.inflow.removed = std::int64_t(it->second);
+    } else if (k == "state.inflow.deferred") {
+      s.inflow.deferred = std::int64_t(it->second);
     } else {
       throw IoError(path + ": checkpoint holds an unknown state value " + k + " (written by a newer version?)");
     }
     it = c.values.erase(it);
+  }
+  if (auto it = c.strings.find("state.id"); it != c.strings.end()) {
+    std::istringstream in(it->second);
+    std::int64_t v;
+    while (in >> v) s.id.push_back(v);
+    if (!in.eof() || s.id.size() != s.size())
+      throw IoError(path + ": checkpoint holds " + std::to_string(s.id.size()) + " particle ids for " +
+                    std::to_string(s.size()) + " slots (corrupt)");
+    c.strings.erase(it);
   }
   return c;
 }

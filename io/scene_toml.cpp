@@ -777,7 +777,7 @@ Scene parse_scene(const toml::table& root, const std::string& source) {
   Scene s;
   s.source = source;
   Reader R(source, &s.lines);
-  R.only(root, "top level", {"domain", "fluid", "walls", "particles", "forces", "flow", "hydrodynamics", "brownian", "time", "output", "run"});
+  R.only(root, "top level", {"domain", "fluid", "walls", "particles", "inflow", "forces", "flow", "hydrodynamics", "brownian", "time", "output", "run"});
 
   const toml::table& dom = sub(R, root, "domain");
   R.only(dom, "domain", {"kind", "box", "shear_strain"});
@@ -946,6 +946,41 @@ Scene parse_scene(const toml::table& root, const std::string& source) {
       s.flow.kind != FlowParams::Kind::tabulated && !flow.contains("rate") && !flow.contains("peclet"))
     R.fail(&flow, "[flow] rate", "required when kind is not \"none\" (or give peclet)");
 
+  // [inflow] (engine/inflow.hpp): particles fed through the inlet of an outline channel.
+  if (root.contains("inflow")) {
+    const toml::table& in = sub(R, root, "inflow");
+    R.only(in, "inflow", {"areal_fraction", "capacity", "radius", "min_gap"});
+    if (s.walls.kind != ChannelParams::Kind::outline)
+      R.fail(&in, "[inflow]", "particles enter through the inlet of a channel outline: set [walls] kind = \"outline\"");
+    if (s.flow.kind != FlowParams::Kind::poiseuille || !(s.flow.mean_velocity > 0.0))
+      R.fail(&in, "[inflow]", "needs the flow that carries the particles in: [flow] kind = \"poiseuille\" with mean_velocity > 0");
+    if (!in.contains("areal_fraction")) R.fail(&in, "[inflow] areal_fraction", "required (areal fraction of the incoming monolayer)");
+    InflowParams& p = s.inflow;
+    p.enabled = true;
+    p.areal_fraction = R.number(in, "inflow", "areal_fraction", 0.0, 0.0, 0.5, true);
+    p.radius = R.number(in, "inflow", "radius", 1.0, 0.0, 1e3, true);
+    p.min_gap = R.number(in, "inflow", "min_gap", 0.1, 0.0, 10.0);
+    const Outline o = make_outline(s.walls);
+    const double w = o.length(std::size_t(o.inlet));
+    if (2.0 * (p.radius + p.min_gap) >= w) {
+      std::ostringstream m;
+      m << "radius " << p.radius << " with min_gap " << p.min_gap << " does not fit across the inlet of width " << w
+        << " (allowed: 2 (radius + min_gap) < inlet width)";
+      R.fail(in.contains("radius") ? in.get("radius") : in.get("min_gap") ? in.get("min_gap") : &in, "[inflow] radius", m.str());
+    }
+    // Default: the scene's particles plus room for the channel at twice the incoming fraction.
+    const long room = long(std::ceil(2.0 * p.areal_fraction * o.area / (kPi * p.radius * p.radius)));
+    p.capacity = R.integer(in, "inflow", "capacity", long(s.interior_count()) + room, 1, 1000000);
+    if (std::size_t(p.capacity) < s.interior_count())
+      R.fail(in.get("capacity"), "[inflow] capacity",
+             "value " + std::to_string(p.capacity) + " is below the scene's " + std::to_string(s.interior_count()) +
+                 " particles (allowed: at least the particles the scene starts with)");
+    for (std::size_t i = 0; i < s.interior_count(); ++i)
+      if (s.fixed[i])
+        R.fail(&in, "[inflow]", "the scene's particles are all mobile in an open channel (particle " + std::to_string(i) +
+                                   " is fixed; fixed particles come from [walls])");
+  }
+
   const toml::table& hy = sub(R, root, "hydrodynamics");
   R.only(hy, "hydrodynamics", {"model", "moments", "solver", "far_field", "tolerance", "lubrication_cutoff",
                                  "lubrication_taper", "lubrication_min_gap"});
@@ -1109,6 +1144,9 @@ std::string resolved_toml(const Scene& s) {
   for (std::size_t i = 0; i < ni; ++i) radii.push_back(s.radii[i]);
   for (std::size_t i = 0; i < ni; ++i) fixed.push_back(bool(s.fixed[i]));
   root.insert("particles", toml::table{{"positions", vec_list(interior(s.positions))}, {"radii", radii}, {"fixed", fixed}});
+  if (s.inflow.enabled)
+    root.insert("inflow", toml::table{{"areal_fraction", s.inflow.areal_fraction}, {"capacity", int64_t(s.inflow.capacity)},
+                                      {"radius", s.inflow.radius}, {"min_gap", s.inflow.min_gap}});
   toml::table forces;
   if (!s.forces.external_force.empty()) forces.insert("external_force", vec_list(interior(s.forces.external_force)));
   if (!s.forces.external_torque.empty()) forces.insert("external_torque", vec_list(interior(s.forces.external_torque)));

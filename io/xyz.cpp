@@ -223,6 +223,11 @@ std::vector<std::string> species_labels(const std::vector<double>& radius, const
 void write_xyz_frame(std::ostream& os, const Frame& f, const Domain& domain, const std::vector<std::string>& species) {
   const std::vector<double>& pos = f.particles.at("position").values;
   const std::size_t n = pos.size() / 3;
+  // Open channels: only the slots holding a particle (id >= 0); frames then differ in length.
+  const auto id_field = f.particles.find("id");
+  auto present = [&](std::size_t i) { return id_field == f.particles.end() || id_field->second.values[i] >= 0; };
+  std::size_t shown = 0;
+  for (std::size_t i = 0; i < n; ++i) shown += present(i) ? 1 : 0;
   if (!species.empty() && species.size() != n) throw IoError("XYZ export: species and position sizes differ");
   // Columns after pos, named as OVITO and ASE map them (radius -> Radius, velo -> Velocity,
   // omega -> Angular Velocity, forces -> Force); each only when the frame has it.
@@ -243,7 +248,7 @@ void write_xyz_frame(std::ostream& os, const Frame& f, const Domain& domain, con
     c.values = &it->second.values;
     props += std::string(":") + c.name + ":R:" + std::to_string(c.width);
   }
-  os << n << '\n';
+  os << shown << '\n';
   if (domain.periodic()) {
     const Vec3& L = domain.box;
     const double m[9] = {L.x(), 0, 0, f.shear_strain * L.y(), L.y(), 0, 0, 0, L.z()};
@@ -260,6 +265,7 @@ void write_xyz_frame(std::ostream& os, const Frame& f, const Domain& domain, con
   put(os, f.time);
   os << " Step=" << f.step << '\n';
   for (std::size_t i = 0; i < n; ++i) {
+    if (!present(i)) continue;
     os << (species.empty() ? std::string("M") : species[i]);
     for (int k = 0; k < 3; ++k) {
       os << ' ';

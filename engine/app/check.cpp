@@ -1,5 +1,7 @@
 #include "engine/app/check.hpp"
 
+#include "engine/inflow.hpp"
+
 #include "engine/app/run.hpp"
 
 #include "engine/core/channel.hpp"
@@ -337,6 +339,13 @@ int check(Simulation& sim, const CheckOptions& opt, std::FILE* out) {
     const double area = cross_section_area(s.walls, s.domain);
     if (area > 0) std::fprintf(out, "; cross-section %.4g a^2 (pressure_drop_particles)", area);
     std::fprintf(out, "\n");
+    if (s.inflow.enabled) {
+      const Inflow in(s);
+      std::fprintf(out,
+                   "inflow: areal fraction %.4g of spheres of radius %.4g a through the inlet at %.4g particles/time "
+                   "(%.4g per step), %zu slots; particles leave through the openings (engine/inflow.hpp)\n",
+                   s.inflow.areal_fraction, s.inflow.radius, in.rate(), in.rate() * s.time.dt, in.slots());
+    }
   }
   if (s.domain.periodic())
     std::fprintf(out, "domain: periodic box %.4g x %.4g x %.4g a, volume fraction %.4g%s\n", s.domain.box.x(),
@@ -503,7 +512,7 @@ int check(Simulation& sim, const CheckOptions& opt, std::FILE* out) {
                  "in all); `stokesian solve` times one evaluation\n",
                  est.seconds_per_step, kMeasuredEvaluations, kAnnounceSeconds);
   } else {
-    const State s0 = sim.initial_state();
+    const State s0 = sim.present(sim.initial_state());
     auto t0 = std::chrono::steady_clock::now();
     const Evaluation ev = sim.evaluate(s0, s0.position, 0.0, true);
     const double t_first = seconds_since(t0);

@@ -217,10 +217,11 @@ std::size_t report_close_pairs(const Scene& scene, const ResolvedModel& model, s
 void solve(Simulation& sim, const std::string& path) {
   const State s = sim.initial_state();
   report_close_pairs(sim.scene(), sim.model(), stderr);
-  const Evaluation ev = sim.evaluate(s, s.position, 0.0, true);
+  const State p = sim.present(s);
+  const Evaluation ev = sim.evaluate(p, p.position, 0.0, true);
   // A previous start's marker would let a later --resume replace this result: remove it first.
   io::detail::remove_if_exists(io::start_marker_path(path));
-  io::Trajectory::write_frames(path, run_header(sim), {sim.frame(s, ev)});
+  io::Trajectory::write_frames(path, run_header(sim), {sim.frame_of_present(s, ev)});
   io::detail::remove_if_exists(io::checkpoint_path(path));  // a previous run's, now stale
 }
 

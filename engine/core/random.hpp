@@ -23,7 +23,7 @@
 
 namespace stokesian {
 
-enum class Purpose : std::uint32_t { brownian = 1, placement = 2, equilibration = 3, test = 4 };
+enum class Purpose : std::uint32_t { brownian = 1, placement = 2, equilibration = 3, test = 4, inflow = 5 };
 
 class RandomStream {
  public:

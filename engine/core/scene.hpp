@@ -220,6 +220,16 @@ struct RunPolicy {
   double max_overlap = 0.5;
 };
 
+// [inflow] (docs/channels.md, "Open channels"): particles enter an outline channel through its inlet
+// and leave through its openings (engine/inflow.hpp).
+struct InflowParams {
+  bool enabled = false;
+  double areal_fraction = 0.0;  // phi_A = n_A pi r^2 of the incoming monolayer, n_A its centres per area [1]
+  long capacity = 0;            // particle slots (most particles present at once) [count]
+  double radius = 1.0;          // radius of the inserted particles [a]
+  double min_gap = 0.1;         // surface gap an inserted particle keeps from every other and from the walls [a]
+};
+
 struct Scene {
   std::string source;  // path of the scene file (for messages)
   Domain domain;
@@ -231,6 +241,7 @@ struct Scene {
   ChannelParams walls;
   std::size_t wall_count = 0;
   std::size_t interior_count() const { return positions.size() - wall_count; }
+  InflowParams inflow;
   ForceParams forces;
   FlowParams flow;
   HydroParams hydro;

@@ -38,6 +38,16 @@ struct State {
   // (engine/stress.hpp: the Brownian stresslet samples); cleared after each frame, kept by checkpoints.
   std::int64_t brownian_samples = 0;
   Mat3 brownian_stresslet_sum = Mat3::Zero();  // sum over samples of sum_i (A(x') - A(x0)) xi [kT]
+  // Open channels ([inflow], engine/inflow.hpp): id[i] is the serial number of the particle in slot
+  // i, -1 for an empty slot (whose position is NaN); empty when the scene has no inflow.
+  std::vector<std::int64_t> id;
+  struct InflowTally {
+    double credit = 0.0;         // particles due at the inlet and not yet placed
+    double pending = -1.0;       // place along the inlet (s in [0, 1]) of the next one; -1: not drawn
+    std::int64_t next_id = 0;    // serial number of the next particle
+    std::int64_t inserted = 0, removed = 0;
+    std::int64_t deferred = 0;   // steps whose due particles could not all be placed
+  } inflow;
   std::size_t size() const { return position.size(); }
 };
 

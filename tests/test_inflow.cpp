@@ -1,0 +1,174 @@
+// Open channels: particles inserted at the inlet and removed at the outlets (issue 17;
+// engine/inflow.hpp, docs/channels.md "Open channels").
+//
+// References, each independent of the code under test:
+//   - the flux-weighted distribution along the inlet: the parabolic profile u(s) = 6 U s (1 - s)
+//     restricted to the band the centres reach, CDF (F(s) - F(s0)) / (F(s1) - F(s0)), F = 3s^2 - 2s^3
+//     (closed form), tested by Kolmogorov-Smirnov;
+//   - kinematics of free-draining spheres in plane Poiseuille flow: each moves along its streamline,
+//     so centres fed at the rate n_A u(y) dy fill the channel at the uniform number density n_A
+//     (steady continuity, d(n u)/dx = 0 with u independent of x): the mean count in a window is n_A
+//     times its band area, and half of it lies in the central half of the band;
+//   - particle conservation: inserted - removed = present - initial, exactly.
+#include <doctest/doctest.h>
+
+#include "engine/inflow.hpp"
+#include "engine/simulation.hpp"
+#include "io/scene_toml.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+using namespace stokesian;
+
+namespace {
+
+// Straight channel [0, 40] x [0, 10]; inlet at x = 0 (edge 3), outlet at x = 40 (edge 1).
+std::string straight_scene(double phi, const std::string& extra = "") {
+  return R"(
+[walls]
+kind = "outline"
+outline = [[0, 0], [40, 0], [40, 10], [0, 10]]
+openings = [1, 3]
+inlet = 3
+[particles]
+generate = "random"
+count = 1
+[inflow]
+areal_fraction = )" + std::to_string(phi) + R"(
+[flow]
+kind = "poiseuille"
+mean_velocity = 1.0
+[hydrodynamics]
+model = "free_draining"
+[time]
+dt = 0.05
+steps = 1
+)" + extra;
+}
+
+double F(double s) { return 3 * s * s - 2 * s * s * s; }
+
+struct Collect final : OutputSink {
+  std::vector<Frame> frames;
+  void record(const Frame& f) override { frames.push_back(f); }
+  void checkpoint(const State&) override {}
+};
+
+}  // namespace
+
+TEST_CASE("inflow: positions along the inlet follow the flux (Kolmogorov-Smirnov, 10^5 draws)") {
+  const Scene scene = io::parse_scene(straight_scene(0.2), "inflow.toml");
+  const Inflow in(scene);
+  const double s0 = 1.1 / 10.0, s1 = 1.0 - s0;  // (radius + min_gap) / width
+  // Rate: n_A U w [F]_{s0}^{s1}, n_A = phi / pi (header of engine/inflow.hpp).
+  CHECK(in.rate() == doctest::Approx(0.2 / kPi * 1.0 * 10.0 * (F(s1) - F(s0))).epsilon(1e-12));
+  Rng rng = RandomStream::for_purpose(5, Purpose::test, 1);
+  const int n = 100000;
+  std::vector<double> s(n);
+  for (double& v : s) v = in.sample_inlet_coordinate(rng);
+  std::sort(s.begin(), s.end());
+  CHECK(s.front() >= s0);
+  CHECK(s.back() <= s1);
+  auto cdf = [&](double x) { return (F(x) - F(s0)) / (F(s1) - F(s0)); };
+  double d = 0;
+  for (int i = 0; i < n; ++i) d = std::max({d, std::abs(cdf(s[i]) - double(i) / n), std::abs(cdf(s[i]) - double(i + 1) / n)});
+  const double critical = 1.628 / std::sqrt(double(n));  // p = 0.01
+  MESSAGE("KS distance " << d << ", critical " << critical);
+  CHECK(d < critical);
+  // The test has power: a uniform distribution on the band is 9 critical distances away.
+  double du = 0;
+  for (int k = 0; k <= 1000; ++k) {
+    const double x = s0 + (s1 - s0) * k / 1000.0;
+    du = std::max(du, std::abs(cdf(x) - (x - s0) / (s1 - s0)));
+  }
+  CHECK(du > 9 * critical);
+}
+
+TEST_CASE("inflow: free-draining spheres fill a straight channel at the incoming density; counts are conserved") {
+  // phi_A = 0.2, 100 000 steps (t = 5000, about 250 transits of the window); frames every 20 steps.
+  const double phi = 0.2;
+  Scene scene = io::parse_scene(straight_scene(phi), "inflow.toml");
+  scene.time.steps = 100000;
+  scene.output.every = 20;
+  Simulation sim(scene);
+  State s = sim.initial_state();
+  Collect out;
+  RunControl rc;
+  rc.quiet = true;
+  sim.run(s, out, rc);
+  REQUIRE(out.frames.size() > 1000);
+  const double n_area = phi / kPi, band_lo = 1.1, band_hi = 8.9, x0 = 10, x1 = 30;
+  const double expected = n_area * (x1 - x0) * (band_hi - band_lo);
+  // Skip the filling transient (t < 100); block averages over 20 blocks give the standard errors.
+  std::vector<double> count, central;
+  for (const Frame& f : out.frames) {
+    const auto& id = f.particles.at("id").values;
+    const auto& x = f.particles.at("position").values;
+    const std::int64_t present = std::int64_t(f.scalar("particles_present"));
+    long n_present = 0;
+    for (std::size_t i = 0; i < id.size(); ++i) n_present += id[i] >= 0 && std::isfinite(x[3 * i]) && i < scene.inflow.capacity;
+    CHECK(n_present == present);
+    CHECK(std::int64_t(f.scalar("inflow_inserted")) - std::int64_t(f.scalar("inflow_removed")) == present - 1);
+    if (f.time < 100) continue;
+    double c = 0, m = 0;
+    for (std::size_t i = 0; i < std::size_t(scene.inflow.capacity); ++i) {
+      if (id[i] < 0 || x[3 * i] < x0 || x[3 * i] >= x1) continue;
+      c += 1;
+      if (std::abs(x[3 * i + 1] - 5.0) < 0.25 * (band_hi - band_lo)) m += 1;
+    }
+    count.push_back(c);
+    central.push_back(m);
+  }
+  auto block_mean = [](const std::vector<double>& v, double& se) {
+    const int B = 20;
+    const std::size_t len = v.size() / B;
+    std::vector<double> b(B, 0.0);
+    for (int k = 0; k < B; ++k) {
+      for (std::size_t i = 0; i < len; ++i) b[std::size_t(k)] += v[std::size_t(k) * len + i];
+      b[std::size_t(k)] /= double(len);
+    }
+    double m = 0, var = 0;
+    for (double x : b) m += x / B;
+    for (double x : b) var += (x - m) * (x - m) / (B - 1);
+    se = std::sqrt(var / B);
+    return m;
+  };
+  double se = 0, se_c = 0;
+  const double mean = block_mean(count, se), mean_c = block_mean(central, se_c);
+  MESSAGE("mean count in the window " << mean << " +- " << se << ", expected " << expected << "; central half "
+                                      << mean_c << " +- " << se_c << ", expected " << expected / 2);
+  CHECK(se < 0.03 * expected);  // the comparison has the resolution to see a few per cent
+  CHECK(std::abs(mean - expected) < 3 * se);
+  CHECK(std::abs(mean_c - expected / 2) < 3 * se_c);
+  // A particle whose place is blocked waits a few steps; waiting steps stay a small fraction.
+  MESSAGE("steps with a particle waiting: " << out.frames.back().scalar("inflow_deferred") << " of " << scene.time.steps);
+  CHECK(out.frames.back().scalar("inflow_deferred") < 0.05 * double(scene.time.steps));
+}
+
+TEST_CASE("inflow: scene errors name the key") {
+  auto refused = [](const std::string& text, const std::string& what) {
+    CAPTURE(what);
+    try {
+      io::parse_scene(text, "bad.toml");
+      FAIL("accepted");
+    } catch (const std::exception& e) {
+      CHECK(std::string(e.what()).find(what) != std::string::npos);
+    }
+  };
+  std::string t = straight_scene(0.2);
+  refused(t.replace(t.find("areal_fraction = "), 17, "areal_fraction = 0.7 #"), "[inflow] areal_fraction");
+  refused(straight_scene(0.2, "[inflow]\n"), "");  // a second [inflow] table is a TOML error
+  std::string r = straight_scene(0.2);
+  r.insert(r.find("[flow]"), "radius = 4.9\n");
+  refused(r, "[inflow] radius");
+  std::string c = straight_scene(0.2);
+  c.replace(c.find("count = 1"), 9, "count = 5");
+  c.insert(c.find("[flow]"), "capacity = 3\n");
+  refused(c, "[inflow] capacity");
+  std::string f = straight_scene(0.2);
+  f.replace(f.find("mean_velocity = 1.0"), 19, "mean_velocity = 0.0");
+  refused(f, "[inflow]");
+}
