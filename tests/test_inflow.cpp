@@ -12,13 +12,19 @@
 //   - particle conservation: inserted - removed = present - initial, exactly.
 #include <doctest/doctest.h>
 
+#include "engine/app/run.hpp"
 #include "engine/inflow.hpp"
 #include "engine/simulation.hpp"
+#include "io/h5md.hpp"
 #include "io/scene_toml.hpp"
+#include "support/hdf5_read.hpp"
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <string>
+#include <unistd.h>
 #include <vector>
 
 using namespace stokesian;
@@ -171,4 +177,53 @@ TEST_CASE("inflow: scene errors name the key") {
   std::string f = straight_scene(0.2);
   f.replace(f.find("mean_velocity = 1.0"), 19, "mean_velocity = 0.0");
   refused(f, "[inflow]");
+}
+
+TEST_CASE("inflow: the trajectory keeps every slot (id -1 and NaN when empty); the XYZ export lists the present ones") {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("stokesian_inflow_" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::string text = straight_scene(0.3);
+  text.replace(text.find("steps = 1\n"), 10, "steps = 1200\n[output]\nevery = 100\nxyz = true\n");
+  Scene scene = io::parse_scene(text, (dir / "s.toml").string());
+  Simulation sim(scene);
+  app::RunOptions opt;
+  opt.out = (dir / "s.h5").string();
+  opt.quiet = true;
+  app::run(sim, opt);
+  const auto info = io::inspect_trajectory(opt.out);
+  const std::size_t slots = std::size_t(scene.inflow.capacity) + scene.wall_count;
+  CHECK(info.particles == slots);
+  const auto id = test::read_doubles(opt.out, "particles/all/id/value");
+  const auto x = test::read_doubles(opt.out, "particles/all/position/value");
+  const auto present = test::read_doubles(opt.out, "observables/particles_present/value");
+  const std::size_t frames = present.size();
+  REQUIRE(frames == 13);
+  REQUIRE(id.size() == frames * slots);
+  std::vector<std::size_t> shown;
+  for (std::size_t f = 0; f < frames; ++f) {
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < slots; ++i) {
+      const double v = id[f * slots + i];
+      CHECK((v >= 0) == std::isfinite(x[3 * (f * slots + i)]));
+      n += v >= 0;
+    }
+    CHECK(double(n - scene.wall_count) == present[f]);
+    shown.push_back(n);
+  }
+  CHECK(present.back() > 5);  // particles came in
+  // Each XYZ frame: a count line, a comment line, then that many particle lines.
+  std::ifstream xyz(dir / "s.xyz");
+  std::size_t f = 0;
+  std::string line;
+  while (std::getline(xyz, line)) {
+    REQUIRE(f < frames);
+    CHECK(std::stoul(line) == shown[f]);
+    std::getline(xyz, line);
+    for (std::size_t k = 0; k < shown[f]; ++k) std::getline(xyz, line);
+    ++f;
+  }
+  CHECK(f == frames);
+  fs::remove_all(dir);
 }

@@ -348,7 +348,8 @@ moments = "FTS"
 dt = 0.001
 steps = 2
 )";
-  // A channel: wall_force and pressure_drop_particles; an outline channel: areal_fraction_sections.
+  // A channel: wall_force and pressure_drop_particles; an outline channel with inflow:
+  // areal_fraction_sections, the id element and the inflow counts.
   const std::string channel_run = R"([flow]
 kind = "poiseuille"
 mean_velocity = 1.0
@@ -374,6 +375,8 @@ openings = [1, 3]
 inlet = 3
 [particles]
 positions = [[10.0, 0.0, 0.0]]
+[inflow]
+areal_fraction = 0.1
 )" + channel_run;
   run_scene(outline, tmp / "e.h5");
   run_scene(brownian_box(2), tmp / "a.h5");
