@@ -940,6 +940,19 @@ Snapshot read_last_frame(const std::string& path) {
   s.position.resize(n);
   for (hsize_t i = 0; i < n; ++i) s.position[i] = Vec3(pos[3 * i], pos[3 * i + 1], pos[3 * i + 2]);
   s.radius = std::move(rad);
+  // Open channels (engine/inflow.hpp): the particles present are the slots with id >= 0.
+  if (has_link(f, "/particles/all/id")) {
+    std::vector<double> id;
+    if (last_row("/particles/all/id/value", 1, id) != n) throw IoError(path + ": id and position hold different particle numbers");
+    std::size_t k = 0;
+    for (hsize_t i = 0; i < n; ++i)
+      if (id[i] >= 0) {
+        s.position[k] = s.position[i];
+        s.radius[k++] = s.radius[i];
+      }
+    s.position.resize(k);
+    s.radius.resize(k);
+  }
   const auto steps = read_vector<std::int64_t>(f, "/particles/all/position/step", H5T_NATIVE_INT64, path);
   const auto times = read_vector<double>(f, "/particles/all/position/time", H5T_NATIVE_DOUBLE, path);
   if (steps.empty() || times.empty()) throw IoError(path + ": /particles/all/position has no step/time entries");
