@@ -6,7 +6,7 @@ of each section and of the whole channel, the particles present, inserted and re
 deposited particles (interior spheres within `contact` a of a wall particle, surface to surface).
 A run still going (or killed) is read as far as its visible frames go.
 
-usage: fouling_summary.py NAME=RUN.h5 [NAME=RUN.h5 ...] [--out bench/results/fouling.json]
+usage: fouling_summary.py NAME=RUN.h5 [NAME=RUN.h5 ...] [--out bench/results/fouling.json] [--note TEXT]
 """
 import json
 import platform
@@ -42,7 +42,7 @@ def extract(path):
     ids = part["id/value"][:]
     p = f["parameters/stokesian"]
     scene = p["scene"][()].decode()
-    build = {k: p[k][()].decode() for k in ("git", "version", "compiler", "build_type", "model")}
+    build = {("describe" if k == "git" else k): p[k][()].decode() for k in ("git", "version", "compiler", "build_type", "model")}
     capacity = int(next(l.split("=")[1] for l in scene.splitlines() if l.strip().startswith("capacity")))
     series = {"step": steps.tolist(), "time": times.tolist()}
     for name in ("pressure_drop_particles", "particles_present", "inflow_inserted", "inflow_removed",
@@ -70,11 +70,18 @@ def main():
         k = args.index("--out")
         out = args[k + 1]
         del args[k:k + 2]
+    note = ""
+    if "--note" in args:
+        k = args.index("--note")
+        note = args[k + 1]
+        del args[k:k + 2]
     if not args:
         sys.exit(__doc__)
     commit = subprocess.run(["git", "describe", "--always", "--dirty"], capture_output=True, text=True).stdout.strip()
-    result = {"machine": {"node": platform.node(), "processor": platform.processor(), "python": platform.python_version()},
-              "commit": commit, "runs": {}}
+    # "git": the tree this summary was made in; each run's "build" holds what its binary recorded.
+    result = {"git": commit,
+              "machine": {"node": platform.node(), "processor": platform.processor(), "python": platform.python_version()},
+              "note": note, "runs": {}}
     for a in args:
         name, path = a.split("=", 1)
         result["runs"][name] = extract(path)
