@@ -9,7 +9,8 @@
 //                    the wall timeout ended it; killed early when the estimate alone exceeds the
 //                    timeout. Not a failure: counted and listed.
 //   nan_output       solve exited 0 but its .h5 holds a non-finite number (except the documented
-//                    +inf of observables/min_gap for a single particle, docs/output.md)
+//                    +inf of observables/min_gap for a single particle, and the NaN of an open
+//                    channel's empty slots, id -1; docs/output.md)
 //   invalid_accepted the docs (docs/scene.md) call the scene invalid, yet the command exited 0
 //   unclear_error    exit 2 whose message lacks the scene file, the offending key or file, the line
 //                    or the allowed range (where the case requires them); std::bad_alloc
@@ -880,6 +881,8 @@ pid_t launch(const Options& o, const Case& c, Run& r, const fs::path& scene) {
 // description of the first bad value.
 struct H5Scan {
   std::string bad;
+  std::vector<double> id;  // open channels: particles/all/id/value, frames x slots (empty slots -1)
+  std::size_t slots = 0;
 };
 herr_t visit_dataset(hid_t obj, const char* name, const H5O_info_t* info, void* data) {
   auto* scan = static_cast<H5Scan*>(data);
@@ -896,9 +899,18 @@ herr_t visit_dataset(hid_t obj, const char* name, const H5O_info_t* info, void* 
       // is a defect.
       const std::string path = name;
       const bool inf_ok = path.size() >= 13 && path.compare(path.size() - 13, 13, "min_gap/value") == 0;
+      // docs/output.md: an open channel's empty slots (id -1) hold NaN in every float element.
+      const bool per_particle = path.rfind("particles/all/", 0) == 0 && path.size() > 6 &&
+                                path.compare(path.size() - 6, 6, "/value") == 0 && !scan->id.empty();
+      const std::size_t per_frame = per_particle ? v.size() / (scan->id.size() / scan->slots) : 0;
+      auto empty_slot = [&](std::size_t i) {
+        if (!per_particle || per_frame % scan->slots != 0) return false;
+        const std::size_t comps = per_frame / scan->slots, frame = i / per_frame, slot = (i % per_frame) / comps;
+        return scan->id[frame * scan->slots + slot] < 0;
+      };
       if (H5Dread(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()) >= 0)
         for (std::size_t i = 0; i < v.size(); ++i)
-          if (!std::isfinite(v[i]) && !(inf_ok && v[i] > 0 && std::isinf(v[i]))) {
+          if (!std::isfinite(v[i]) && !(inf_ok && v[i] > 0 && std::isinf(v[i])) && !(std::isnan(v[i]) && empty_slot(i))) {
             std::ostringstream o;
             o << name << "[" << i << "] = " << v[i];
             scan->bad = o.str();
@@ -916,6 +928,21 @@ std::string nonfinite_in(const fs::path& h5) {
   const hid_t f = H5Fopen(h5.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
   if (f < 0) return "";
   H5Scan scan;
+  if (H5Lexists(f, "particles", H5P_DEFAULT) > 0 && H5Lexists(f, "particles/all", H5P_DEFAULT) > 0 &&
+      H5Lexists(f, "particles/all/id", H5P_DEFAULT) > 0) {
+    const hid_t ds = H5Dopen2(f, "particles/all/id/value", H5P_DEFAULT);
+    if (ds >= 0) {
+      const hid_t space = H5Dget_space(ds);
+      hsize_t dims[2] = {0, 0};
+      if (H5Sget_simple_extent_ndims(space) == 2 && H5Sget_simple_extent_dims(space, dims, nullptr) == 2 && dims[1] > 0) {
+        scan.id.resize(dims[0] * dims[1]);
+        scan.slots = dims[1];
+        if (H5Dread(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, scan.id.data()) < 0) scan.id.clear();
+      }
+      H5Sclose(space);
+      H5Dclose(ds);
+    }
+  }
 #if H5_VERSION_GE(1, 12, 0)
   H5Ovisit3(f, H5_INDEX_NAME, H5_ITER_NATIVE, visit_dataset, &scan, H5O_INFO_BASIC);
 #else
