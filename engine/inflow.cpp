@@ -10,7 +10,18 @@ namespace stokesian {
 
 namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// Everything of a state but its particles: time, step, box, noise state and the Brownian sums.
+void copy_clock(const State& from, State& to) {
+  to.time = from.time;
+  to.step = from.step;
+  to.dt = from.dt;
+  to.domain = from.domain;
+  to.rng_state = from.rng_state;
+  to.brownian_samples = from.brownian_samples;
+  to.brownian_stresslet_sum = from.brownian_stresslet_sum;
 }
+}  // namespace
 
 Inflow::Inflow(const Scene& scene) {
   const InflowParams& p = scene.inflow;
@@ -77,25 +88,13 @@ State Inflow::compact(const State& s, const std::vector<std::size_t>& idx) {
     c.radius.push_back(s.radius[i]);
     c.fixed.push_back(s.fixed[i]);
   }
-  c.time = s.time;
-  c.step = s.step;
-  c.dt = s.dt;
-  c.domain = s.domain;
-  c.rng_state = s.rng_state;
-  c.brownian_samples = s.brownian_samples;
-  c.brownian_stresslet_sum = s.brownian_stresslet_sum;
+  copy_clock(s, c);
   return c;
 }
 
 void Inflow::scatter(const State& c, const std::vector<std::size_t>& idx, State& s) {
   for (std::size_t k = 0; k < idx.size(); ++k) s.position[idx[k]] = c.position[k];
-  s.time = c.time;
-  s.step = c.step;
-  s.dt = c.dt;
-  s.domain = c.domain;
-  s.rng_state = c.rng_state;
-  s.brownian_samples = c.brownian_samples;
-  s.brownian_stresslet_sum = c.brownian_stresslet_sum;
+  copy_clock(c, s);
 }
 
 Frame Inflow::expand(const Frame& f, const State& s, const std::vector<std::size_t>& idx) const {

@@ -32,14 +32,16 @@ using namespace stokesian;
 namespace {
 
 // Straight channel [0, 40] x [0, 10]; inlet at x = 0 (edge 3), outlet at x = 40 (edge 1).
-std::string straight_scene(double phi, const std::string& extra = "") {
-  return R"(
+const std::string kStraight = R"(
 [walls]
 kind = "outline"
 outline = [[0, 0], [40, 0], [40, 10], [0, 10]]
 openings = [1, 3]
 inlet = 3
-[particles]
+)";
+
+std::string straight_scene(double phi, const std::string& extra = "") {
+  return kStraight + R"([particles]
 generate = "random"
 count = 1
 [inflow]
@@ -234,12 +236,7 @@ TEST_CASE("wall contact: a sphere pulled onto the wall particles in shear rests 
   // is carried against them at ~ shear rate x a: the lubrication floor decides whether the contact
   // force can hold it (docs/channels.md, "Contact with wall particles").
   auto deepest = [](const std::string& floor) {
-    std::string text = R"(
-[walls]
-kind = "outline"
-outline = [[0, 0], [40, 0], [40, 10], [0, 10]]
-openings = [1, 3]
-inlet = 3
+    std::string text = kStraight + R"(
 [particles]
 positions = [[20.5, 1.0, 0.0]]
 [[forces.pair]]
