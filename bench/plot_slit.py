@@ -1,7 +1,9 @@
 #!/usr/bin/python3
 """Chart the channel validation (bench/validate_slit.cpp, issue 17): (a) mobility of a sphere beside
 one plane wall of wall particles, parallel and perpendicular, against the gap h, with Faxen's and
-Brenner's flat-wall series; (b) the same in a slit of height 32 a with the superposed series;
+Brenner's flat-wall series; (b) the same in a slit of height 32 a against two flat planes (their
+point-force reflection plus each wall's finite-size terms, computed by the driver) and, dashed, the
+two walls' series superposed;
 (c) short-time self-diffusivity D_par/D0 and D_perp/D0 across a 6 a slit at each volume fraction,
 binned by the centre height (error bars: one standard error of the bin mean). Prints the tables of
 docs/channels.md.
@@ -21,6 +23,7 @@ out = sys.argv[2] if len(sys.argv) > 2 else src.replace(".json", ".png")
 rows = json.load(open(src))["rows"]
 mob = [r for r in rows if r["params"]["kind"] == 0]
 dif = [r for r in rows if r["params"]["kind"] == 1]
+flat = sorted([r for r in rows if r["params"]["kind"] == 3], key=lambda r: r["params"]["h"])
 
 fig, ax = plt.subplots(1, 3, figsize=(16, 4.8))
 for geo, a, title in ((0, ax[0], "(a) one plane wall (patch 80 a)"), (1, ax[1], "(b) slit H = 32 a (patches 64 a)")):
@@ -29,21 +32,29 @@ for geo, a, title in ((0, ax[0], "(a) one plane wall (patch 80 a)"), (1, ax[1], 
         a.set_visible(False)
         continue
     h = np.array([r["params"]["h"] for r in pts])
-    print(f"{'plane' if geo == 0 else 'slit'}: h, parallel, series, dev %, perpendicular, series, dev %")
+    print(f"{'plane' if geo == 0 else 'slit'}: h, parallel, flat, dev %, perpendicular, flat, dev %"
+          + ("; superposed parallel, perpendicular" if geo == 1 else ""))
     for r in pts:
         p = r["phases"]
         print(f"  {r['params']['h']:5.2f}  {p['par']:.4f} {p['par_ref']:.4f} {100 * (p['par'] / p['par_ref'] - 1):+6.1f}"
-              f"  {p['perp']:.4f} {p['perp_ref']:.4f} {100 * (p['perp'] / p['perp_ref'] - 1):+6.1f}")
-    # The series on a fine grid (same formulas as the driver).
+              f"  {p['perp']:.4f} {p['perp_ref']:.4f} {100 * (p['perp'] / p['perp_ref'] - 1):+6.1f}"
+              + (f";  {p['par_sup']:.4f} {p['perp_sup']:.4f}" if geo == 1 else ""))
+    # The single wall's series on a fine grid (same formulas as the driver); the slit's flat-plane
+    # references come from the driver (kind 3 rows).
     hh = np.geomspace(max(h.min(), 0.05), h.max(), 200)
     z1 = 1.0 + hh
     z2 = 32.0 - z1 if geo == 1 else np.full_like(hh, np.inf)
     faxen = lambda x: 1 - 9 / 16 * x + x**3 / 8 - 45 / 256 * x**4 - x**5 / 16
     brenner = lambda x: 1 - 9 / 8 * x + 0.5 * x**3
-    curves = {"par": faxen(1 / z1) + faxen(1 / z2) - 1, "perp": brenner(1 / z1) + brenner(1 / z2) - 1}
+    sup = {"par": faxen(1 / z1) + faxen(1 / z2) - 1, "perp": brenner(1 / z1) + brenner(1 / z2) - 1}
     for key, c, lab in (("par", "C0", "parallel"), ("perp", "C3", "perpendicular")):
         a.plot(h, [r["phases"][key] for r in pts], "o", color=c, label=f"{lab}, wall particles")
-        a.plot(hh, curves[key], "-", color=c, label=f"{lab}, flat-wall series" + (" (superposed)" if geo == 1 else ""))
+        if geo == 0:
+            a.plot(hh, sup[key], "-", color=c, label=f"{lab}, flat-wall series")
+        else:
+            a.plot([r["params"]["h"] for r in flat], [r["phases"][key + "_ref"] for r in flat], "-", color=c,
+                   label=f"{lab}, two flat planes")
+            a.plot(hh, sup[key], "--", color=c, lw=0.8, label=f"{lab}, single walls superposed")
     a.axvline(3.0, color="0.7", ls=":")
     a.set_xscale("log")
     a.set_xlabel("gap h / a (sphere surface to the walls' boundary plane)")

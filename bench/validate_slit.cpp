@@ -8,7 +8,9 @@
 // the mobility along x (parallel) and y (perpendicular) in units of 1/(6 pi mu a) against the gap h
 // between the sphere's surface and the walls' boundary plane. References (xi = a/z, z = 1 + h):
 // Faxen's parallel series 1 - 9/16 xi + 1/8 xi^3 - 45/256 xi^4 - 1/16 xi^5 and the leading terms
-// of Brenner's perpendicular series 1 - 9/8 xi + 1/2 xi^3, superposed for two walls.
+// of Brenner's perpendicular series 1 - 9/8 xi + 1/2 xi^3; for the slit, two flat planes: their
+// point-force reflection (Liron & Mochon 1976) plus each wall's finite-size terms
+// (tests/support/wall_mobility.hpp), and, for comparison, the two walls' series superposed.
 //
 // Part "diffusion" (kind 1). Slit of height H = 6 a between one-layer walls in a periodic box
 // 16.4 x 10.05 x 16.4 a (8 x 8 wall sites of spacing 2.05 per wall), interior spheres of radius 1 in
@@ -21,8 +23,10 @@
 // D_par = (D_xx + D_zz)/2 and D_perp = D_yy against the centre height y - c_y. [L24] compares with
 // Swan & Brady (2011); we have no table of those values, so the check is the trend [L24] reports:
 // D_perp < D_par throughout at phi >= 0.25, comparable at the centre at phi = 0.1.
-// Rows: kind 0: geometry (0 plane, 1 slit), h, par, perp, par_ref, perp_ref;
-//       kind 1: phi, seed, eta (centre height y - c_y), Dpar, Dperp, N (interior), seconds.
+// Rows: kind 0: geometry (0 plane, 1 slit), h, par, perp, par_ref, perp_ref (flat walls), par_sup,
+//               perp_sup (the single walls superposed; equal to the references for the plane);
+//       kind 1: phi, seed, eta (centre height y - c_y), Dpar, Dperp, N (interior);
+//       kind 2: phi, seed, N, seconds;  kind 3: the slit's references on a fine grid of h.
 // Usage: validate_slit [--quick] [--out DIR]; --quick: the slit at h = 3 and 15, and phi = 0.1 with
 // one configuration (a smoke run). Full: about 10 min on 2 cores.
 #include "bench/harness.hpp"
@@ -76,15 +80,29 @@ int main(int argc, char** argv) {
         const double z1 = 1.0 + gap, z2 = geo == 0 ? 1e300 : 32.0 - z1;
         const Vec3 x(0.0, (geo == 0 ? 0.0 : -16.0) + z1, 0.0);
         const double par = mobility(h, w, x, 0), perp = mobility(h, w, x, 1);
-        const double par_ref = faxen_parallel(1 / z1) + faxen_parallel(1 / z2) - 1;
-        const double perp_ref = brenner_perpendicular(1 / z1) + brenner_perpendicular(1 / z2) - 1;
-        std::printf("%s h %5.2f: parallel %.4f (series %.4f, %+.1f %%), perpendicular %.4f (series %.4f, %+.1f %%)\n",
+        const double par_sup = faxen_parallel(1 / z1) + faxen_parallel(1 / z2) - 1;
+        const double perp_sup = brenner_perpendicular(1 / z1) + brenner_perpendicular(1 / z2) - 1;
+        const double par_ref = geo == 0 ? par_sup : test_support::slit_parallel(z1, 32.0);
+        const double perp_ref = geo == 0 ? perp_sup : test_support::slit_perpendicular(z1, 32.0);
+        std::printf("%s h %5.2f: parallel %.4f (flat %.4f, %+.1f %%), perpendicular %.4f (flat %.4f, %+.1f %%)\n",
                     geo == 0 ? "plane" : "slit ", gap, par, par_ref, 100 * (par / par_ref - 1), perp, perp_ref,
                     100 * (perp / perp_ref - 1));
         res.add({{"kind", 0}, {"geometry", geo}, {"h", gap}, {"walls", double(w.size())}},
-                {{"par", par}, {"perp", perp}, {"par_ref", par_ref}, {"perp_ref", perp_ref}});
+                {{"par", par},
+                 {"perp", perp},
+                 {"par_ref", par_ref},
+                 {"perp_ref", perp_ref},
+                 {"par_sup", par_sup},
+                 {"perp_sup", perp_sup}});
       }
     }
+  }
+
+  // The slit's flat-wall references on a fine grid, for the chart.
+  for (int i = 0; i <= 60; ++i) {
+    const double gap = 0.05 * std::pow(15.0 / 0.05, i / 60.0), z1 = 1.0 + gap;
+    res.add({{"kind", 3}, {"h", gap}},
+            {{"par_ref", test_support::slit_parallel(z1, 32.0)}, {"perp_ref", test_support::slit_perpendicular(z1, 32.0)}});
   }
 
   // Self-diffusivity across a 6 a slit.
