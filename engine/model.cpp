@@ -48,13 +48,19 @@ double min_gap_below(const Scene& s, double gap) {
   return g;
 }
 
+// The most particles the run holds at once, which the N-based choices use: the scene's, or with
+// [inflow] its slots plus the walls (the open channel fills up after the start).
+std::size_t particles_at_most(const Scene& s) {
+  return s.inflow.enabled ? std::size_t(s.inflow.capacity) + s.wall_count : s.positions.size();
+}
+
 [[noreturn]] void unavailable(const Scene& s, const std::string& table, const std::string& key, const std::string& what) {
   throw ConfigError(s.where(table, key) + ": " + what);
 }
 
 // Why `e` cannot solve this scene ("" if it can).
 std::string unusable(const SolverEntry& e, const Scene& s, bool brownian) {
-  const std::size_t n = s.positions.size();
+  const std::size_t n = particles_at_most(s);
   const std::size_t limit = s.domain.periodic() ? e.max_periodic : e.max_open;
   if (brownian && !e.brownian) return "it does not sample Brownian motion";
   if (limit > 0 && n > limit) return "it is limited to N <= " + std::to_string(limit) + " (N = " + std::to_string(n) + ")";
@@ -75,7 +81,7 @@ std::string solver_named(const std::string& key) {
 const SolverEntry* usable_solver(HydroModel level, const Scene& s, bool brownian, std::string* why) {
   std::string all;
   const std::string named = level == HydroModel::stokesian ? solver_named(s.hydro.solver) : "";
-  const std::size_t n = s.positions.size(), dense_up_to = s.domain.periodic() ? kAutoDenseUpToPeriodic : kAutoDenseUpToOpen;
+  const std::size_t n = particles_at_most(s), dense_up_to = s.domain.periodic() ? kAutoDenseUpToPeriodic : kAutoDenseUpToOpen;
   for (const auto& e : hydro_solvers().entries()) {
     if (e.level != level) continue;
     if (!named.empty() && e.name != named) continue;
@@ -123,7 +129,7 @@ ModelKey ResolvedModel::key() const {
 
 ResolvedModel resolve_model(const Scene& s) {
   ResolvedModel m;
-  const std::size_t n = s.positions.size();
+  const std::size_t n = particles_at_most(s);
   // A pair law in a periodic box reaches at most half the smallest edge (one image per pair, the
   // minimum-image pair search): gap cut-off + 2 a_max <= L_min / 2.
   if (s.domain.periodic() && n >= 2) {
@@ -148,6 +154,11 @@ ResolvedModel resolve_model(const Scene& s) {
   m.brownian = s.fluid.kT > 0.0;
   m.fixed_particles = std::any_of(s.fixed.begin(), s.fixed.end(), [](char c) { return c != 0; });
   m.reasons.push_back(m.brownian ? "fluid.kT > 0: Brownian motion on" : "fluid.kT = 0: athermal");
+  if (s.inflow.enabled)
+    m.reasons.push_back("[inflow]: up to N = " + std::to_string(n) + " particles at once (capacity " +
+                        std::to_string(s.inflow.capacity) + " + " + std::to_string(s.wall_count) +
+                        " wall particles); the choices below use that N, and inserted particles come within "
+                        "min_gap of the others");
   if (s.walls.kind == ChannelParams::Kind::outline)
     m.reasons.push_back("[walls] outline: a monolayer at z = 0; the motion out of the plane (U_z, Omega_x, Omega_y) is "
                         "removed (exact for coplanar spheres, whose in- and out-of-plane motions decouple; docs/channels.md)");
@@ -161,14 +172,18 @@ ResolvedModel resolve_model(const Scene& s) {
       // The exact smallest gap is printed only where Stokesian dynamics can apply (N <= 2000, a
       // cheap O(N^2) loop); beyond, only whether a gap is below kNearGap matters: a cell-list
       // search over pairs within that gap (O(N); the double loop took minutes at N = 3e5).
-      const double g = n <= 2000 ? min_gap(s) : min_gap_below(s, kNearGap);
+      const double g = s.positions.size() <= 2000 ? min_gap(s) : min_gap_below(s, kNearGap);
       std::ostringstream r;
-      const bool near = g < kNearGap || !s.forces.pair.empty();
+      const bool inserted_close = s.inflow.enabled && s.inflow.min_gap < kNearGap;
+      const bool near = g < kNearGap || !s.forces.pair.empty() || inserted_close;
       std::string why;
       const SolverEntry* sd = near ? usable_solver(HydroModel::stokesian, s, m.brownian, &why) : nullptr;
       if (sd) {
         m.level = HydroModel::stokesian;
-        r << "auto level: " << (g < kNearGap ? "close pairs (smallest gap " : "pair forces bring particles together (smallest gap ")
+        r << "auto level: "
+          << (g < kNearGap               ? "close pairs (smallest gap "
+              : !s.forces.pair.empty() ? "pair forces bring particles together (smallest gap "
+                                       : "[inflow] inserts particles within min_gap of others (smallest gap now ")
           << g << " a) -> stokesian (far field + lubrication, solver " << sd->name << " for N = " << n << ")";
       } else {
         m.level = HydroModel::far_field;
@@ -280,11 +295,11 @@ ResolvedModel resolve_model(const Scene& s) {
         const double ff_tol = derive_knobs(s.hydro.tolerance, m.level, *a_hi / *a_lo).far_field;
         const long from = trees::tree_auto_from(ff_tol, m.moments);
         std::ostringstream o;
-        if (from > 0 && long(s.positions.size()) >= from) {
+        if (from > 0 && long(n) >= from) {
           chosen = methods.find("tree");
-          o << ", N = " << s.positions.size() << " >= " << from << ", the measured crossover with direct at product tolerance " << ff_tol;
+          o << ", N = " << n << " >= " << from << ", the measured crossover with direct at product tolerance " << ff_tol;
         } else if (from > 0) {
-          o << ", N = " << s.positions.size() << " < " << from << ", the octree's measured crossover at product tolerance " << ff_tol;
+          o << ", N = " << n << " < " << from << ", the octree's measured crossover at product tolerance " << ff_tol;
         }
         why = o.str();
       }

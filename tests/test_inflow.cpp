@@ -14,6 +14,7 @@
 
 #include "engine/app/run.hpp"
 #include "engine/inflow.hpp"
+#include "engine/model.hpp"
 #include "engine/simulation.hpp"
 #include "io/h5md.hpp"
 #include "io/scene_toml.hpp"
@@ -117,7 +118,7 @@ TEST_CASE("inflow: free-draining spheres fill a straight channel at the incoming
     const auto& x = f.particles.at("position").values;
     const std::int64_t present = std::int64_t(f.scalar("particles_present"));
     long n_present = 0;
-    for (std::size_t i = 0; i < id.size(); ++i) n_present += id[i] >= 0 && std::isfinite(x[3 * i]) && i < scene.inflow.capacity;
+    for (std::size_t i = 0; i < id.size(); ++i) n_present += id[i] >= 0 && std::isfinite(x[3 * i]) && i < std::size_t(scene.inflow.capacity);
     CHECK(n_present == present);
     CHECK(std::int64_t(f.scalar("inflow_inserted")) - std::int64_t(f.scalar("inflow_removed")) == present - 1);
     if (f.time < 100) continue;
@@ -179,6 +180,27 @@ TEST_CASE("inflow: scene errors name the key") {
   std::string f = straight_scene(0.2);
   f.replace(f.find("mean_velocity = 1.0"), 19, "mean_velocity = 0.0");
   refused(f, "[inflow]");
+}
+
+TEST_CASE("inflow: the model is chosen for the most particles present, capacity + walls") {
+  // One sphere and the straight channel's walls at the start; 200 slots. The auto solver takes dense
+  // SD up to 120 particles in an open domain (engine/model.cpp), so the full channel needs the
+  // accelerated solver although the start would fit the dense one; and inserted spheres come within
+  // min_gap (0.1 a) of the others, so the level is Stokesian although the start has no close pair.
+  std::string text = straight_scene(0.2);
+  text.replace(text.find("model = \"free_draining\""), 23, "model = \"auto\"");
+  text.insert(text.find("[flow]"), "capacity = 200\n");
+  const Scene s = io::parse_scene(text, "open.toml");
+  REQUIRE(s.positions.size() < 120);
+  const ResolvedModel m = resolve_model(s);
+  INFO(m.describe());
+  CHECK(m.level == HydroModel::stokesian);
+  CHECK(m.solver == "accelerated_sd");
+  CHECK(m.describe().find("[inflow]: up to N = " + std::to_string(200 + s.wall_count)) != std::string::npos);
+  // Without [inflow] the same start resolves to the far field (no close pair, no pair force).
+  std::string closed = text.substr(0, text.find("[inflow]")) + text.substr(text.find("[flow]"));
+  const ResolvedModel mc = resolve_model(io::parse_scene(closed, "closed.toml"));
+  CHECK(mc.level == HydroModel::far_field);
 }
 
 TEST_CASE("inflow: the trajectory keeps every slot (id -1 and NaN when empty); the XYZ export lists the present ones") {
