@@ -39,7 +39,8 @@
 // spheres) multiplies the iterations. The solve is right-preconditioned on those rows by a block
 // Jacobi inverse in open domains: the held particles are split into spatial clusters of at most
 // kHeldCluster (recursive bisection along the longest extent) and each cluster's block D_c M_c of
-// the grand mobility (engine/kernels/far_field.hpp) is LU-factorised once per configuration. GMRES
+// the grand mobility (engine/kernels/far_field.hpp) is LU-factorised, and kept while the held
+// particles stay where they are (they do not move; a new set or position refactorises). GMRES
 // then solves A P^-1 y = b, W = P^-1 y; with right preconditioning its residual is the true one, so
 // the tolerance keeps its meaning (tested against the unpreconditioned twin,
 // set_held_preconditioner(false), tests/test_sd_accelerated.cpp "held-row preconditioner").
@@ -133,6 +134,9 @@ class AcceleratedStokesianDynamics final : public HydroSolver {
   void factorise_held(const std::vector<long>& v);
   void apply_held_inverse(VecX& z) const;
   bool held_precondition_ = true;
+  std::vector<long> held_ids_;  // the held particles, centres and radii the blocks belong to
+  std::vector<Vec3> held_x_;
+  std::vector<double> held_a_;
   std::vector<std::vector<long>> held_entries_;
   std::vector<Eigen::PartialPivLU<MatX>> held_lu_;
 };
