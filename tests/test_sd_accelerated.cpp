@@ -158,14 +158,18 @@ std::unique_ptr<AcceleratedStokesianDynamics> accelerated(const Case& c, Moments
                                                         shift, method, factor_gap);
 }
 
+AmbientFlow simple_shear(double rate) {
+  FlowParams fp;
+  fp.kind = FlowParams::Kind::simple_shear;
+  fp.rate = rate;
+  return ambient_flow(fp);
+}
+
 }  // namespace
 
 TEST_CASE("accelerated SD: achieved error against dense SD at or below the requested tolerance") {
   const double mu = 1.0;
-  FlowParams fp;
-  fp.kind = FlowParams::Kind::simple_shear;
-  fp.rate = 1.0;
-  const AmbientFlow flow = ambient_flow(fp);
+  const AmbientFlow flow = simple_shear(1.0);
   struct Spec {
     const char* name;
     long n;
@@ -228,10 +232,7 @@ TEST_CASE("accelerated SD: achieved error against dense SD at or below the reque
 TEST_CASE("accelerated SD: the answer depends neither on the shift nor on the pairs dropped from the factor; "
           "GMRES and BiCGStab agree") {
   const double mu = 1.3;
-  FlowParams fp;
-  fp.kind = FlowParams::Kind::simple_shear;
-  fp.rate = 0.7;
-  const AmbientFlow flow = ambient_flow(fp);
+  const AmbientFlow flow = simple_shear(0.7);
   const Case c = make_case("open phi 0.4", 50, 0.4, false, 0.0, 0.0, 4, true, 77);
   const Configuration conf{c.x, c.a, c.domain};
   FlowSample sample;
@@ -268,10 +269,7 @@ TEST_CASE("accelerated SD: the held-row preconditioner and the plain solve agree
   // they differ by at most 2 tol; the preconditioner takes no more iterations, and on the wall at
   // least a fifth fewer. In periodic boxes it is off (engine/sd_accelerated.hpp): the same answer.
   const double mu = 1.0;
-  FlowParams fp;
-  fp.kind = FlowParams::Kind::simple_shear;
-  fp.rate = 1.0;
-  const AmbientFlow flow = ambient_flow(fp);
+  const AmbientFlow flow = simple_shear(1.0);
   std::vector<Case> cases;
   cases.push_back(make_case("open phi 0.3, 20 % held", 60, 0.3, false, 0.0, 0.0, 4, true, 201));
   cases.push_back(make_case("open phi 0.2, 90 % held", 60, 0.2, false, 0.0, 0.0, 3, false, 202));
