@@ -6,11 +6,13 @@
 #include "engine/core/flow.hpp"
 #include "engine/core/sym_traceless.hpp"
 #include "engine/stress.hpp"
+#include "trees/clusters.hpp"
 #include "trees/neighbor_list.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 namespace stokesian {
 
@@ -328,6 +330,88 @@ class ChannelOutputs final : public Observer {
   Vec2 streamwise_ = Vec2(1.0, 0.0);
 };
 
+// Settling clouds ([output] cloud; docs/clouds.md). Cloud members: the interior particles in
+// friends-of-friends components (trees/clusters.hpp, centre distance <= cloud_link) that hold at
+// least cloud_min_fraction of the interior particles; the others are lost (to the tail).
+//   cloud_particles, cloud_lost, cloud_parts (components counted as clouds: 1 until it breaks up);
+//   cloud_centroid, cloud_velocity: mean position and velocity of the members; mean_velocity: of
+//     all interior particles;
+//   cloud_radius: sqrt(5/3 <|x - c|^2>) over the members (the radius of a uniform sphere);
+//   cloud_gyration: eigenvalues of <(x - c)(x - c)^T>, largest first (R^2/5 each for a sphere);
+//   cloud_axis_fraction: the share of members within 0.25 cloud_radius of the line through c along
+//     the mean external force (1 - (15/16)^{3/2} = 0.0923 for a uniform sphere; ~0 once a torus
+//     has opened its centre).
+class CloudOutputs final : public Observer {
+ public:
+  explicit CloudOutputs(const Scene& scene)
+      : n_(scene.interior_count()), link_(scene.output.cloud_link), min_fraction_(scene.output.cloud_min_fraction) {
+    Vec3 f = Vec3::Zero();
+    for (std::size_t i = 0; i < scene.forces.external_force.size() && i < n_; ++i) f += scene.forces.external_force[i];
+    axis_ = f.norm() > 0 ? Vec3(f.normalized()) : Vec3(0, 0, -1);
+  }
+  void observe(const State& s, const Evaluation& ev, Frame& f) const override {
+    const std::vector<Vec3> x(s.position.begin(), s.position.begin() + long(n_));
+    const trees::Clusters c = trees::link_by_centres(x, s.domain, link_);
+    const double need = min_fraction_ * double(n_);
+    std::vector<char> member(n_, 0);
+    std::int64_t parts = 0, count = 0;
+    for (const auto& m : c.members) {
+      if (double(m.size()) < need) break;  // sorted by decreasing size
+      ++parts;
+      for (int i : m) member[std::size_t(i)] = 1;
+      count += std::int64_t(m.size());
+    }
+    Vec3 centre = Vec3::Zero(), v = Vec3::Zero(), v_all = Vec3::Zero();
+    const bool have_v = ev.hydro.U.size() >= n_;
+    for (std::size_t i = 0; i < n_; ++i) {
+      if (have_v) v_all += ev.hydro.U[i];
+      if (!member[i]) continue;
+      centre += x[i];
+      if (have_v) v += ev.hydro.U[i];
+    }
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    Mat3 g = Mat3::Zero();
+    double axis_share = nan, radius = nan;
+    if (count > 0) {
+      centre /= double(count);
+      v /= double(count);
+      for (std::size_t i = 0; i < n_; ++i)
+        if (member[i]) g += (x[i] - centre) * (x[i] - centre).transpose();
+      g /= double(count);
+      radius = std::sqrt(5.0 / 3.0 * g.trace());
+      long near_axis = 0;
+      for (std::size_t i = 0; i < n_; ++i)
+        if (member[i]) {
+          const Vec3 r = x[i] - centre;
+          near_axis += (r - r.dot(axis_) * axis_).norm() < 0.25 * radius;
+        }
+      axis_share = double(near_axis) / double(count);
+    } else {
+      centre = v = Vec3::Constant(nan);
+    }
+    Eigen::SelfAdjointEigenSolver<Mat3> es(g, Eigen::EigenvaluesOnly);
+    const Vec3 ev3 = count > 0 ? Vec3(es.eigenvalues().reverse()) : Vec3::Constant(nan);
+    if (have_v) v_all /= double(n_);
+    auto vec = [](const Vec3& a) { return std::vector<double>{a.x(), a.y(), a.z()}; };
+    f.set_count("cloud_particles", count);
+    f.set_count("cloud_lost", std::int64_t(n_) - count);
+    f.set_count("cloud_parts", parts);
+    f.observables["cloud_centroid"] = Field{{3}, vec(centre), units::length, false};
+    if (have_v) {
+      f.observables["cloud_velocity"] = Field{{3}, vec(v), units::velocity, false};
+      f.observables["mean_velocity"] = Field{{3}, vec(v_all), units::velocity, false};
+    }
+    f.set_scalar("cloud_radius", radius, units::length);
+    f.observables["cloud_gyration"] = Field{{3}, vec(ev3), units::area, false};
+    f.set_scalar("cloud_axis_fraction", axis_share, "");
+  }
+
+ private:
+  std::size_t n_;
+  double link_, min_fraction_;
+  Vec3 axis_;
+};
+
 class Gaps final : public Observer {
  public:
   void observe(const State& s, const Evaluation& ev, Frame& f) const override {
@@ -378,6 +462,7 @@ std::vector<std::unique_ptr<Observer>> make_observers(const Scene& scene, const 
   if (has_stresslet(model.moments)) obs.push_back(std::make_unique<StressletSum>());
   if (scene.domain.periodic()) obs.push_back(std::make_unique<BulkStress>(scene, model));
   if (scene.walls.any()) obs.push_back(std::make_unique<ChannelOutputs>(scene));
+  if (scene.output.cloud) obs.push_back(std::make_unique<CloudOutputs>(scene));
   obs.push_back(std::make_unique<Gaps>());
   obs.push_back(std::make_unique<RunStatistics>());
   return obs;

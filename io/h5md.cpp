@@ -914,18 +914,26 @@ void Trajectory::write_frames(const std::string& path, const RunHeader& header, 
   detail::remove_if_exists(t.shadow_path());  // a previous run's working copy at this path
 }
 
-Snapshot read_last_frame(const std::string& path) {
+Snapshot read_frame(const std::string& path, std::int64_t index, bool present_only) {
   H f = open_file(path, H5F_ACC_RDONLY);
   Snapshot s;
-  auto last_row = [&](const std::string& name, std::size_t comps, std::vector<double>& out) -> hsize_t {
+  std::int64_t frame = -1;  // resolved from the position dataset
+  auto row = [&](const std::string& name, std::size_t comps, std::vector<double>& out) -> hsize_t {
     H d = open_dataset(f, name, path);
     const auto dims = dims_of(d, path);
     if (dims.size() != (comps > 1 ? 3u : 2u) || (comps > 1 && dims[2] != comps))
       throw IoError(path + ": dataset " + name + " has an unexpected shape");
     if (dims[0] == 0) throw IoError(path + ": dataset " + name + " holds no frames");
+    if (frame < 0) {
+      frame = index < 0 ? std::int64_t(dims[0]) + index : index;
+      if (frame < 0 || frame >= std::int64_t(dims[0]))
+        throw IoError(path + ": frame " + std::to_string(index) + " does not exist (the file holds " +
+                      std::to_string(dims[0]) + " frames)");
+    }
+    if (std::int64_t(dims[0]) <= frame) throw IoError(path + ": dataset " + name + " holds fewer frames than position");
     H fspace = checked(H5Dget_space(d), H5Sclose, path, "dataspace");
     std::vector<hsize_t> start(dims.size(), 0), count = dims;
-    start[0] = dims[0] - 1;
+    start[0] = hsize_t(frame);
     count[0] = 1;
     checked(H5Sselect_hyperslab(fspace, H5S_SELECT_SET, start.data(), nullptr, count.data(), nullptr), path, "selection");
     H mspace = checked(H5Screate_simple(static_cast<int>(count.size()), count.data(), nullptr), H5Sclose, path, "dataspace");
@@ -934,30 +942,46 @@ Snapshot read_last_frame(const std::string& path) {
     return dims[1];
   };
   std::vector<double> pos, rad;
-  const hsize_t n = last_row("/particles/all/position/value", 3, pos);
-  const hsize_t nr = last_row("/particles/all/radius/value", 1, rad);
+  const hsize_t n = row("/particles/all/position/value", 3, pos);
+  const hsize_t nr = row("/particles/all/radius/value", 1, rad);
   if (n != nr) throw IoError(path + ": position and radius hold different particle numbers");
   s.position.resize(n);
   for (hsize_t i = 0; i < n; ++i) s.position[i] = Vec3(pos[3 * i], pos[3 * i + 1], pos[3 * i + 2]);
   s.radius = std::move(rad);
+  if (has_link(f, "/particles/all/velocity")) {
+    std::vector<double> v;
+    if (row("/particles/all/velocity/value", 3, v) != n)
+      throw IoError(path + ": velocity and position hold different particle numbers");
+    s.velocity.resize(n);
+    for (hsize_t i = 0; i < n; ++i) s.velocity[i] = Vec3(v[3 * i], v[3 * i + 1], v[3 * i + 2]);
+  }
   // Open channels (engine/inflow.hpp): the particles present are the slots with id >= 0.
   if (has_link(f, "/particles/all/id")) {
     std::vector<double> id;
-    if (last_row("/particles/all/id/value", 1, id) != n) throw IoError(path + ": id and position hold different particle numbers");
+    if (row("/particles/all/id/value", 1, id) != n) throw IoError(path + ": id and position hold different particle numbers");
+    s.id.assign(id.begin(), id.end());
+  }
+  if (!s.id.empty() && present_only) {
+    const std::vector<std::int64_t> id = std::move(s.id);
+    s.id.clear();
     std::size_t k = 0;
     for (hsize_t i = 0; i < n; ++i)
       if (id[i] >= 0) {
         s.position[k] = s.position[i];
+        if (!s.velocity.empty()) s.velocity[k] = s.velocity[i];
         s.radius[k++] = s.radius[i];
       }
     s.position.resize(k);
     s.radius.resize(k);
+    if (!s.velocity.empty()) s.velocity.resize(k);
   }
   const auto steps = read_vector<std::int64_t>(f, "/particles/all/position/step", H5T_NATIVE_INT64, path);
   const auto times = read_vector<double>(f, "/particles/all/position/time", H5T_NATIVE_DOUBLE, path);
   if (steps.empty() || times.empty()) throw IoError(path + ": /particles/all/position has no step/time entries");
-  s.step = steps.back();
-  s.time = times.back();
+  if (std::int64_t(steps.size()) <= frame || std::int64_t(times.size()) <= frame)
+    throw IoError(path + ": /particles/all/position has fewer step/time entries than frames");
+  s.step = steps[std::size_t(frame)];
+  s.time = times[std::size_t(frame)];
   {
     H box = open_group(f, "/particles/all/box", path);
     H b = open_attr(box, "boundary", "particles/all/box", path);
@@ -968,7 +992,7 @@ Snapshot read_last_frame(const std::string& path) {
       if (H5Oget_info_by_name(box, "edges", &oi, H5P_DEFAULT) < 0) fail(path, "cannot inspect box/edges");
       if (oi.type == H5O_TYPE_GROUP) {  // edges per frame: rows a = (Lx,0,0), b = (strain Ly, Ly, 0), c = (0,0,Lz)
         std::vector<double> e;
-        last_row("/particles/all/box/edges/value", 3, e);
+        row("/particles/all/box/edges/value", 3, e);
         if (e.size() != 9) throw IoError(path + ": box/edges/value is not 3 x 3 per frame");
         s.box = Vec3(e[0], e[4], e[8]);
         s.shear_strain = e[3] / e[4];
@@ -982,6 +1006,41 @@ Snapshot read_last_frame(const std::string& path) {
   return s;
 }
 
+Snapshot read_last_frame(const std::string& path) { return read_frame(path, -1, true); }
+
+namespace {
+// Writes each column as a 1D dataset of group g (numbers as float64, text as fixed-length strings);
+// returns the stored names ('/' replaced by '|').
+std::vector<std::string> write_columns(hid_t g, const std::vector<TableColumn>& columns, const std::string& tmp) {
+  std::vector<std::string> names;
+  for (const auto& c : columns) {
+    std::string name = c.name;
+    std::replace(name.begin(), name.end(), '/', '|');
+    names.push_back(name);
+    if (c.numeric) {
+      const hsize_t n = c.num.size();
+      H space = checked(H5Screate_simple(1, &n, nullptr), H5Sclose, tmp, "dataspace");
+      H d = checked(H5Dcreate2(g, name.c_str(), H5T_IEEE_F64LE, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose,
+                    tmp, "cannot create dataset " + name);
+      if (n) checked(H5Dwrite(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, c.num.data()), tmp, "cannot write " + name);
+    } else {
+      std::size_t len = 0;
+      for (const auto& t : c.text) len = std::max(len, t.size());
+      H type = string_type(len, tmp);
+      const std::size_t width = len + 1;
+      std::vector<char> buf(width * c.text.size(), '\0');
+      for (std::size_t i = 0; i < c.text.size(); ++i) std::memcpy(buf.data() + i * width, c.text[i].data(), c.text[i].size());
+      const hsize_t n = c.text.size();
+      H space = checked(H5Screate_simple(1, &n, nullptr), H5Sclose, tmp, "dataspace");
+      H d = checked(H5Dcreate2(g, name.c_str(), type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose, tmp,
+                    "cannot create dataset " + name);
+      if (n) checked(H5Dwrite(d, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf.data()), tmp, "cannot write " + name);
+    }
+  }
+  return names;
+}
+}  // namespace
+
 void write_table_h5(const std::string& path, const std::vector<TableColumn>& columns,
                     const std::vector<std::pair<std::string, std::string>>& attributes) {
   quiet_hdf5();
@@ -989,31 +1048,7 @@ void write_table_h5(const std::string& path, const std::vector<TableColumn>& col
   {
     H f = checked(H5Fcreate(tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose, tmp, "cannot create file");
     H g = make_group(f, "table", tmp);
-    std::vector<std::string> names;
-    for (const auto& c : columns) {
-      std::string name = c.name;
-      std::replace(name.begin(), name.end(), '/', '|');
-      names.push_back(name);
-      if (c.numeric) {
-        const hsize_t n = c.num.size();
-        H space = checked(H5Screate_simple(1, &n, nullptr), H5Sclose, tmp, "dataspace");
-        H d = checked(H5Dcreate2(g, name.c_str(), H5T_IEEE_F64LE, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose,
-                      tmp, "cannot create dataset " + name);
-        if (n) checked(H5Dwrite(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, c.num.data()), tmp, "cannot write " + name);
-      } else {
-        std::size_t len = 0;
-        for (const auto& t : c.text) len = std::max(len, t.size());
-        H type = string_type(len, tmp);
-        const std::size_t width = len + 1;
-        std::vector<char> buf(width * c.text.size(), '\0');
-        for (std::size_t i = 0; i < c.text.size(); ++i) std::memcpy(buf.data() + i * width, c.text[i].data(), c.text[i].size());
-        const hsize_t n = c.text.size();
-        H space = checked(H5Screate_simple(1, &n, nullptr), H5Sclose, tmp, "dataspace");
-        H d = checked(H5Dcreate2(g, name.c_str(), type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose, tmp,
-                      "cannot create dataset " + name);
-        if (n) checked(H5Dwrite(d, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf.data()), tmp, "cannot write " + name);
-      }
-    }
+    const std::vector<std::string> names = write_columns(g, columns, tmp);
     {
       std::size_t len = 0;
       for (const auto& t : names) len = std::max(len, t.size());
@@ -1026,6 +1061,31 @@ void write_table_h5(const std::string& path, const std::vector<TableColumn>& col
       H d = checked(H5Dcreate2(f, "table_columns", type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose, tmp,
                     "cannot create dataset table_columns");
       if (n) checked(H5Dwrite(d, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf.data()), tmp, "cannot write table_columns");
+    }
+    for (const auto& [k, v] : attributes) write_attr_strings(f, k, {v}, true, tmp);
+    f.close(tmp);
+  }
+  detail::durable_rename(tmp, path);
+}
+
+void write_tables_h5(const std::string& path, const std::vector<TableGroup>& groups, const std::vector<Matrix2D>& matrices,
+                     const std::vector<std::pair<std::string, std::string>>& attributes) {
+  quiet_hdf5();
+  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
+  {
+    H f = checked(H5Fcreate(tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose, tmp, "cannot create file");
+    for (const TableGroup& t : groups) {
+      H g = make_group(f, t.name, tmp);
+      write_columns(g, t.columns, tmp);
+    }
+    for (const Matrix2D& m : matrices) {
+      if (m.data.size() != m.rows * m.cols) throw IoError(tmp + ": matrix " + m.name + " has the wrong number of values");
+      const hsize_t dims[2] = {m.rows, m.cols};
+      H space = checked(H5Screate_simple(2, dims, nullptr), H5Sclose, tmp, "dataspace");
+      H d = checked(H5Dcreate2(f, m.name.c_str(), H5T_IEEE_F64LE, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose,
+                    tmp, "cannot create dataset " + m.name);
+      if (!m.data.empty())
+        checked(H5Dwrite(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, m.data.data()), tmp, "cannot write " + m.name);
     }
     for (const auto& [k, v] : attributes) write_attr_strings(f, k, {v}, true, tmp);
     f.close(tmp);

@@ -108,8 +108,14 @@ struct Snapshot {
   bool periodic = false;     // the run's box (last frame): edge lengths and Lees-Edwards strain
   Vec3 box = Vec3::Zero();
   double shear_strain = 0.0;
+  std::vector<Vec3> velocity;     // read_frame: when the trajectory records velocity; else empty
+  std::vector<std::int64_t> id;   // read_frame with present_only = false, open channels: slot ids (-1 empty)
 };
 Snapshot read_last_frame(const std::string& path);
+// Frame `index` (0-based; negative counts from the end, -1 the last). present_only: open channels
+// keep only the occupied slots (as read_last_frame); otherwise every slot is returned with its id
+// (an empty slot's values are NaN), so wall particles stay the last entries of the frame.
+Snapshot read_frame(const std::string& path, std::int64_t index, bool present_only);
 
 // Every observable of a trajectory (/observables/<name>), whole: its times and values, each value
 // flattened to `components` numbers (integer observables converted to double). For summaries.
@@ -133,6 +139,19 @@ struct TableColumn {
 };
 void write_table_h5(const std::string& path, const std::vector<TableColumn>& columns,
                     const std::vector<std::pair<std::string, std::string>>& attributes);
+// Several tables (group /<name>/<column>) and 2D datasets (/<name>, rows x cols, row-major) in one
+// file, written through path + ".tmp" and renamed as write_table_h5.
+struct TableGroup {
+  std::string name;
+  std::vector<TableColumn> columns;
+};
+struct Matrix2D {
+  std::string name;
+  std::size_t rows = 0, cols = 0;
+  std::vector<double> data;
+};
+void write_tables_h5(const std::string& path, const std::vector<TableGroup>& groups, const std::vector<Matrix2D>& matrices,
+                     const std::vector<std::pair<std::string, std::string>>& attributes);
 
 namespace detail {
 // Durable file operations shared by the trajectory and checkpoint writers.

@@ -211,7 +211,8 @@ void read_particles(const Reader& R, const toml::table& t, Scene& s, const std::
                     std::optional<Snapshot>& from_run) {
   const std::string T = "particles";
   R.only(t, T, {"positions", "radii", "radius", "file", "generate", "count", "volume_fraction", "size_distribution",
-                "radius_ratio", "large_fraction", "sigma", "seed", "fixed", "region", "equilibration_sweeps", "min_gap"});
+                "radius_ratio", "large_fraction", "sigma", "seed", "fixed", "region", "equilibration_sweeps", "min_gap",
+                "ln_mean", "ln_variance", "segregation"});
   const bool has_pos = t.contains("positions"), has_file = t.contains("file"), has_gen = t.contains("generate");
   if (int(has_pos) + int(has_file) + int(has_gen) != 1)
     R.fail(&t, "[particles] positions/file/generate",
@@ -219,7 +220,7 @@ void read_particles(const Reader& R, const toml::table& t, Scene& s, const std::
                " (allowed: exactly one of positions, file, generate)");
   // Keys of the generator (`radius` also sizes positions and radius-less XYZ files).
   for (const char* key : {"count", "volume_fraction", "size_distribution", "radius_ratio", "large_fraction", "sigma",
-                          "seed", "region", "equilibration_sweeps", "min_gap"})
+                          "seed", "region", "equilibration_sweeps", "min_gap", "ln_mean", "ln_variance", "segregation"})
     if (!has_gen && t.contains(key))
       R.fail(t.get(key), std::string("[particles] ") + key,
              std::string("only meaningful with generate (it applies only to generated particles, not to ") +
@@ -281,12 +282,44 @@ void read_particles(const Reader& R, const toml::table& t, Scene& s, const std::
                     ? PlacementParams::Pattern::lattice : PlacementParams::Pattern::random;
     p.volume_fraction = R.number(t, T, "volume_fraction", 0.1, 0.0, 0.74, true);
     p.radius = R.number(t, T, "radius", 1.0, kMinRadius, kMaxRadius);
-    const std::string sd = R.choice(t, T, "size_distribution", "monodisperse", {"monodisperse", "bidisperse", "lognormal"});
+    const std::string sd =
+        R.choice(t, T, "size_distribution", "monodisperse", {"monodisperse", "bidisperse", "lognormal", "bimodal"});
     p.sizes = sd == "bidisperse" ? PlacementParams::Sizes::bidisperse
-            : sd == "lognormal" ? PlacementParams::Sizes::lognormal : PlacementParams::Sizes::monodisperse;
+            : sd == "lognormal" ? PlacementParams::Sizes::lognormal
+            : sd == "bimodal"   ? PlacementParams::Sizes::bimodal : PlacementParams::Sizes::monodisperse;
     p.radius_ratio = R.number(t, T, "radius_ratio", 2.0, 1.0 / kMaxRadiusRatio, kMaxRadiusRatio);
     p.large_fraction = R.number(t, T, "large_fraction", 0.5, 0.0, 1.0);
     p.sigma = R.number(t, T, "sigma", 0.2, 0.0, 2.0);
+    // The thesis's lognormal LN(m, s^2): m the mean and s^2 the variance of ln a, i.e. radius = e^m
+    // (the median) and sigma = s.
+    if (t.contains("ln_mean") || t.contains("ln_variance")) {
+      const char* key = t.contains("ln_mean") ? "ln_mean" : "ln_variance";
+      if (p.sizes != PlacementParams::Sizes::lognormal)
+        R.fail(t.get(key), std::string("[particles] ") + key, "only meaningful with size_distribution = \"lognormal\"");
+      if (!t.contains("ln_mean") || !t.contains("ln_variance"))
+        R.fail(t.get(key), "[particles] ln_mean/ln_variance", "give both (the mean and the variance of ln a)");
+      for (const char* other : {"radius", "sigma"})
+        if (t.contains(other))
+          R.fail(t.get(other), std::string("[particles] ") + other,
+                 "give ln_mean and ln_variance or radius and sigma, not both (radius = exp(ln_mean), sigma = sqrt(ln_variance))");
+      const double m = R.number(t, T, "ln_mean", 0.0, std::log(kMinRadius), std::log(kMaxRadius));
+      const double v = R.number(t, T, "ln_variance", 0.04, 0.0, 4.0);
+      p.radius = std::exp(m);
+      p.sigma = std::sqrt(v);
+    }
+    {
+      const std::string seg = R.choice(t, T, "segregation", "none", {"none", "large_up", "large_down"});
+      p.segregation = seg == "large_up"     ? PlacementParams::Segregation::large_up
+                      : seg == "large_down" ? PlacementParams::Segregation::large_down
+                                            : PlacementParams::Segregation::none;
+      if (p.segregation != PlacementParams::Segregation::none) {
+        if (p.sizes != PlacementParams::Sizes::bidisperse && p.sizes != PlacementParams::Sizes::bimodal)
+          R.fail(t.get("segregation"), "[particles] segregation",
+                 "needs two species (size_distribution = \"bidisperse\" or \"bimodal\")");
+        if (s.domain.periodic() || (t.contains("region") && R.string(t, T, "region", "sphere") != "sphere"))
+          R.fail(t.get("segregation"), "[particles] segregation", "needs an open domain with region = \"sphere\"");
+      }
+    }
     p.seed = std::uint64_t(R.integer(t, T, "seed", 1, 0, std::numeric_limits<long>::max()));
     p.min_gap = R.number(t, T, "min_gap", p.min_gap, 0.0, 1.0);
     if (t.contains("equilibration_sweeps") && p.pattern != PlacementParams::Pattern::random)
@@ -326,10 +359,10 @@ void read_particles(const Reader& R, const toml::table& t, Scene& s, const std::
       } else {
         const double a3 = p.radius * p.radius * p.radius;
         double mean_a3 = a3;
-        if (p.sizes == PlacementParams::Sizes::bidisperse)
+        if (p.sizes == PlacementParams::Sizes::bidisperse || p.sizes == PlacementParams::Sizes::bimodal)
           mean_a3 = a3 * (1.0 - p.large_fraction + p.large_fraction * std::pow(p.radius_ratio, 3));
-        else if (p.sizes == PlacementParams::Sizes::lognormal)
-          mean_a3 = a3 * std::exp(4.5 * p.sigma * p.sigma);
+        if (p.sizes == PlacementParams::Sizes::lognormal || p.sizes == PlacementParams::Sizes::bimodal)
+          mean_a3 *= std::exp(4.5 * p.sigma * p.sigma);
         // Checked as a number before anything is allocated for it.
         const double count = std::round(p.volume_fraction * fluid_volume(s.walls, s.domain.box) / (4.0 / 3.0 * kPi * mean_a3));
         if (!(count >= 1 && count <= double(kMaxCount))) {
@@ -367,9 +400,9 @@ void read_particles(const Reader& R, const toml::table& t, Scene& s, const std::
     double phi = p.volume_fraction;
     if (s.domain.periodic()) {
       double mean_a3 = p.radius * p.radius * p.radius;
-      if (p.sizes == PlacementParams::Sizes::bidisperse)
+      if (p.sizes == PlacementParams::Sizes::bidisperse || p.sizes == PlacementParams::Sizes::bimodal)
         mean_a3 *= 1.0 - p.large_fraction + p.large_fraction * std::pow(p.radius_ratio, 3);
-      else if (p.sizes == PlacementParams::Sizes::lognormal)
+      if (p.sizes == PlacementParams::Sizes::lognormal || p.sizes == PlacementParams::Sizes::bimodal)
         mean_a3 *= std::exp(4.5 * p.sigma * p.sigma);
       phi = double(p.count) * 4.0 / 3.0 * kPi * mean_a3 / fluid_volume(s.walls, s.domain.box);
     }
@@ -1048,7 +1081,7 @@ Scene parse_scene(const toml::table& root, const std::string& source) {
   s.time.rkf_tolerance = R.number(ti, "time", "rkf_tolerance", 1e-6, 1e-14, 1.0);
 
   const toml::table& out = sub(R, root, "output");
-  R.only(out, "output", {"every", "checkpoint_every", "record", "xyz", "author"});
+  R.only(out, "output", {"every", "checkpoint_every", "record", "xyz", "author", "cloud", "cloud_link", "cloud_min_fraction"});
   s.output.every = R.integer(out, "output", "every", 1, 1, std::numeric_limits<long>::max());
   s.output.checkpoint_every = R.integer(out, "output", "checkpoint_every", 0, 0, std::numeric_limits<long>::max());
   if (s.output.checkpoint_every > 0 && s.output.checkpoint_every % s.output.every != 0)
@@ -1068,6 +1101,35 @@ Scene parse_scene(const toml::table& root, const std::string& source) {
     }
   }
   s.output.author = R.string(out, "output", "author", "");
+  // Cloud observables: true | false | "auto" (a settling cloud: open domain, gravity, no walls or inflow).
+  {
+    bool settling = !s.domain.periodic() && !s.walls.any() && !s.inflow.enabled && fo.contains("gravity") &&
+                    s.interior_count() >= 2;
+    if (const toml::node* cn = R.get(out, "output", "cloud")) {
+      if (const auto b = cn->value_exact<bool>()) settling = *b;
+      else if (const auto t = cn->value_exact<std::string>(); !t || *t != "auto")
+        R.fail(cn, "[output] cloud", "expected true, false or \"auto\"");
+    }
+    if (settling && s.domain.periodic())
+      R.fail(out.get("cloud"), "[output] cloud", "cloud observables need an open domain (this scene is periodic)");
+    s.output.cloud = settling;
+    s.output.cloud_min_fraction = R.number(out, "output", "cloud_min_fraction", 0.05, 0.0, 1.0, true);
+    // Default link: kCloudLinkSpacings x (V/N)^(1/3), V the sphere of radius sqrt(5/3) x rms distance
+    // of the interior centres from their centroid (the radius of a uniform sphere of that rms).
+    double link = 0.0;
+    const std::size_t n = s.interior_count();
+    if (settling && n >= 2) {
+      Vec3 c = Vec3::Zero();
+      for (std::size_t i = 0; i < n; ++i) c += s.positions[i];
+      c /= double(n);
+      double r2 = 0.0;
+      for (std::size_t i = 0; i < n; ++i) r2 += (s.positions[i] - c).squaredNorm();
+      const double R0 = std::sqrt(5.0 / 3.0 * r2 / double(n));
+      link = kCloudLinkSpacings * std::cbrt(4.0 / 3.0 * kPi * R0 * R0 * R0 / double(n));
+    }
+    s.output.cloud_link = R.number(out, "output", "cloud_link", link > 0 ? link : 1.0, 0.0, 1e12, true);
+  }
+
   if (const toml::node* rn = R.get(out, "output", "record")) {
     const toml::array* a = rn->as_array();
     if (!a) R.fail(rn, "[output] record", "expected a list of names");
@@ -1216,7 +1278,10 @@ std::string resolved_toml(const Scene& s) {
   root.insert("output", toml::table{{"every", int64_t(s.output.every)},
                                     {"checkpoint_every", int64_t(s.output.checkpoint_every)},
                                     {"record", record},
-                                    {"author", s.output.author}});
+                                    {"author", s.output.author},
+                                    {"cloud", s.output.cloud},
+                                    {"cloud_link", s.output.cloud_link},
+                                    {"cloud_min_fraction", s.output.cloud_min_fraction}});
   if (!s.output.xyz || s.output.xyz_path.empty()) root["output"].as_table()->insert("xyz", s.output.xyz);
   else root["output"].as_table()->insert("xyz", s.output.xyz_path);
   std::ostringstream o;

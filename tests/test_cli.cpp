@@ -445,3 +445,53 @@ steps = 20
   CHECK(contains(ns.err, "--strain needs a run in simple shear"));
   CHECK(cli("average " + (scratch() / "missing.h5").string()).status == 4);
 }
+
+TEST_CASE("clusters: counts, histogram, shapes and velocities of a known configuration; option errors") {
+  // A doublet (gap 0.05), a straight triplet (gaps 0.05) pulled down by unit forces (free draining:
+  // it translates rigidly at 1/(6 pi)), and two singlets; three frames.
+  const fs::path scene = write_scene("cl.toml", R"([particles]
+positions = [[0, 0, 0], [2.05, 0, 0], [0, 20, 0], [2.05, 20, 0], [4.1, 20, 0], [30, 0, 0], [-30, 0, 0]]
+radius = 1.0
+[forces]
+external_force = [[0, 0, 0], [0, 0, 0], [0, 0, -1], [0, 0, -1], [0, 0, -1], [0, 0, 0], [0, 0, 0]]
+[hydrodynamics]
+model = "free_draining"
+[time]
+dt = 0.1
+steps = 2
+)");
+  const std::string h5 = (scratch() / "cl.h5").string();
+  REQUIRE(cli("run " + scene.string() + " --out " + h5 + " --quiet").status == 0);
+  const std::string out = (scratch() / "cl_clusters.h5").string();
+  const Result r = cli("clusters " + h5 + " --gap 0.06 --out " + out);
+  REQUIRE(r.status == 0);
+  CHECK(contains(r.out, "clusters by surface gap <= 0.06 a"));
+  CHECK(test::read_doubles(out, "frames/clusters") == std::vector<double>{4, 4, 4});
+  CHECK(test::read_doubles(out, "frames/particles") == std::vector<double>{7, 7, 7});
+  CHECK(test::read_doubles(out, "frames/largest") == std::vector<double>{3, 3, 3});
+  // Histogram rows: 2 singlets, 1 doublet, 1 triplet; nothing changes, so every growth rate is 0.
+  CHECK(test::read_doubles(out, "size_histogram") == std::vector<double>{2, 1, 1, 2, 1, 1, 2, 1, 1});
+  for (double g : test::read_doubles(out, "growth_rate")) CHECK(g == 0.0);
+  const auto size = test::read_doubles(out, "clusters/size"), rg = test::read_doubles(out, "clusters/radius_of_gyration");
+  const auto feret = test::read_doubles(out, "clusters/feret_diameter"), vz = test::read_doubles(out, "clusters/velocity_z");
+  REQUIRE(size.size() == 12);
+  CHECK(size[0] == 3);  // largest first
+  CHECK(rg[0] == doctest::Approx(std::sqrt(2.05 * 2.05 * 8.0 / 12.0 + 0.6)));
+  CHECK(feret[0] == doctest::Approx(6.1));
+  CHECK(vz[0] == doctest::Approx(-1.0 / (6.0 * kPiTest)));
+  CHECK(vz[1] == doctest::Approx(0.0));
+  CHECK(feret[1] == doctest::Approx(4.05));
+  // A tighter gap dissolves both: 7 singlets.
+  REQUIRE(cli("clusters " + h5 + " --gap 0.04 --every 2 --out " + out).status == 0);
+  CHECK(test::read_doubles(out, "frames/clusters") == std::vector<double>{7, 7});
+  // Bad options and files: named, nothing written.
+  fs::remove(out);
+  const Result bad = cli("clusters " + h5 + " --gap -1 --out " + out);
+  CHECK(bad.status != 0);
+  CHECK(contains(bad.err, "--gap"));
+  CHECK(contains(cli("clusters " + h5 + " --every 0 --out " + out).err, "--every"));
+  CHECK(!fs::exists(out));
+  const Result missing = cli("clusters " + (scratch() / "none.h5").string());
+  CHECK(missing.status == 4);
+  CHECK(contains(missing.err, "none.h5"));
+}

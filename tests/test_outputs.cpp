@@ -378,13 +378,25 @@ positions = [[10.0, 0.0, 0.0]]
 [inflow]
 areal_fraction = 0.1
 )" + channel_run;
+  // A settling cloud (open domain, gravity): the cloud observables.
+  const std::string cloud = R"([particles]
+positions = [[0,0,0],[2.5,0,0],[0,3,1],[1,1,4]]
+[forces]
+gravity = [0.0, 0.0, -1.0]
+[hydrodynamics]
+model = "far_field"
+[time]
+dt = 0.1
+steps = 1
+)";
+  run_scene(cloud, tmp / "f.h5");
   run_scene(outline, tmp / "e.h5");
   run_scene(brownian_box(2), tmp / "a.h5");
   run_scene(fts, tmp / "b.h5");
   run_scene(sheared, tmp / "c.h5");
   run_scene(channel, tmp / "d.h5");
   std::set<std::string> observables, elements;
-  for (const std::string& f : {tmp / "a.h5", tmp / "b.h5", tmp / "c.h5", tmp / "d.h5", tmp / "e.h5"}) {
+  for (const std::string& f : {tmp / "a.h5", tmp / "b.h5", tmp / "c.h5", tmp / "d.h5", tmp / "e.h5", tmp / "f.h5"}) {
     const auto info = io::inspect_trajectory(f);
     observables.insert(info.observables.begin(), info.observables.end());
     for (const auto& spec : info.particle_fields) elements.insert(spec.name);

@@ -327,3 +327,79 @@ TEST_CASE("regression pin: the generator's stream (Philox, counter-based) for a 
     CHECK(mc.position[19][c] == doctest::Approx(last[c]).epsilon(1e-12));
   }
 }
+
+TEST_CASE("bimodal radii: two species, each lognormal about its median; the thesis's LN(m, s^2) keys") {
+  PlacementParams p;
+  p.count = 4000;
+  p.volume_fraction = 0.01;
+  p.equilibration_sweeps = 0;
+  p.sizes = PlacementParams::Sizes::bimodal;
+  p.radius = 0.5;
+  p.radius_ratio = 4.0;
+  p.large_fraction = 0.25;
+  p.sigma = 0.1;
+  const std::vector<double> r = place_particles(p, Vec3::Zero()).radius;
+  // The modes (0.5 and 2, sigma 0.1) do not overlap: split at their geometric mean 1.
+  std::vector<double> small, large;
+  for (double a : r) (a < 1.0 ? small : large).push_back(std::log(a));
+  CHECK(large.size() == 1000);  // exactly round(large_fraction N)
+  auto mean_sd = [](const std::vector<double>& v) {
+    double m = 0, q = 0;
+    for (double x : v) m += x;
+    m /= double(v.size());
+    for (double x : v) q += (x - m) * (x - m);
+    return std::make_pair(m, std::sqrt(q / double(v.size() - 1)));
+  };
+  // Standard errors: mean sigma/sqrt(n) (0.0018, 0.0032), sd sigma/sqrt(2n) (0.0013, 0.0022); four of them.
+  const auto [ms, ss] = mean_sd(small);
+  const auto [ml, sl] = mean_sd(large);
+  CHECK(std::abs(ms - std::log(0.5)) < 0.008);
+  CHECK(std::abs(ml - std::log(2.0)) < 0.013);
+  CHECK(std::abs(ss - 0.1) < 0.006);
+  CHECK(std::abs(sl - 0.1) < 0.009);
+  // ln_mean / ln_variance are radius = e^m, sigma = s: the same configuration.
+  const std::string head = "[particles]\ngenerate = \"random\"\ncount = 50\nvolume_fraction = 0.05\n"
+                           "equilibration_sweeps = 0\nsize_distribution = \"lognormal\"\n";
+  const Scene a = io::parse_scene(head + "ln_mean = -0.35\nln_variance = 0.04\n", "a.toml");
+  const Scene b = io::parse_scene(head + "radius = 0.7046880897187134\nsigma = 0.2\n", "b.toml");
+  REQUIRE(a.radii.size() == 50);
+  for (std::size_t i = 0; i < a.radii.size(); ++i) CHECK(a.radii[i] == doctest::Approx(b.radii[i]).epsilon(1e-12));
+  CHECK(contains(error_of(head + "ln_mean = -0.35\nln_variance = 0.04\nsigma = 0.2\n"), "not both"));
+  CHECK(contains(error_of(head + "ln_mean = -0.35\n"), "give both"));
+  CHECK(contains(error_of("[particles]\ngenerate = \"random\"\ncount = 5\nln_mean = 0.1\nln_variance = 0.01\n"),
+                 "only meaningful with size_distribution = \"lognormal\""));
+}
+
+TEST_CASE("segregated clouds: the large species in the upper half of the sphere, the small in the lower") {
+  for (auto seg : {PlacementParams::Segregation::large_up, PlacementParams::Segregation::large_down}) {
+    PlacementParams p;
+    p.count = 2000;
+    p.volume_fraction = 0.075;
+    p.equilibration_sweeps = 0;
+    p.sizes = PlacementParams::Sizes::bidisperse;
+    p.radius = 0.5;
+    p.radius_ratio = 2.0;
+    p.large_fraction = 0.5;
+    p.segregation = seg;
+    const Placement pl = place_particles(p, Vec3::Zero());
+    const double up = seg == PlacementParams::Segregation::large_up ? 1.0 : -1.0;
+    long large = 0;
+    for (std::size_t i = 0; i < pl.position.size(); ++i) {
+      const double a = pl.radius[i], z = up * pl.position[i].z();
+      if (a > 0.75) {
+        ++large;
+        CHECK(z >= a);  // wholly in its half
+      } else {
+        CHECK(-z >= a);
+      }
+      CHECK(pl.position[i].norm() + a <= pl.sphere_radius * (1 + 1e-12));
+    }
+    CHECK(large == 1000);
+    CHECK(smallest_gap(pl, Vec3::Zero()) >= p.min_gap);
+  }
+  // Only with two species in an open sphere, generated at random.
+  CHECK(contains(error_of("[particles]\ngenerate = \"random\"\ncount = 5\nsegregation = \"large_up\"\n"), "two species"));
+  CHECK(contains(error_of("[particles]\ngenerate = \"random\"\ncount = 5\nsize_distribution = \"bidisperse\"\n"
+                          "region = \"cube\"\nsegregation = \"large_up\"\n"),
+                 "region = \"sphere\""));
+}

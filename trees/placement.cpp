@@ -28,18 +28,26 @@ constexpr double room_fraction = 0.02;
 
 [[noreturn]] void fail(const std::string& msg) { throw std::invalid_argument(msg); }
 
-std::vector<double> draw_radii(const PlacementParams& p) {
+// Radii, and which particles belong to the large species (bidisperse, bimodal).
+std::vector<double> draw_radii(const PlacementParams& p, std::vector<char>& large) {
   RandomStream rs = RandomStream::for_purpose(p.seed, Purpose::placement, 0);
   const std::size_t n = std::size_t(p.count);
   std::vector<double> a(n, p.radius);
-  if (p.sizes == PlacementParams::Sizes::bidisperse) {
+  large.assign(n, 0);
+  if (p.sizes == PlacementParams::Sizes::bidisperse || p.sizes == PlacementParams::Sizes::bimodal) {
     // Exactly round(f N) large particles at random indices: the first of a random permutation
     // (Fisher–Yates with the counter-based stream).
     std::vector<std::size_t> perm(n);
     std::iota(perm.begin(), perm.end(), std::size_t(0));
     for (std::size_t i = n; i > 1; --i) std::swap(perm[i - 1], perm[std::size_t(rs.below(i))]);
     const std::size_t nlarge = std::size_t(std::lround(p.large_fraction * double(p.count)));
-    for (std::size_t k = 0; k < nlarge; ++k) a[perm[k]] = p.radius * p.radius_ratio;
+    for (std::size_t k = 0; k < nlarge; ++k) {
+      a[perm[k]] = p.radius * p.radius_ratio;
+      large[perm[k]] = 1;
+    }
+    // Bimodal: each species' radii lognormal about its median (drawn after the species, in index order).
+    if (p.sizes == PlacementParams::Sizes::bimodal)
+      for (auto& v : a) v *= std::exp(p.sigma * rs.normal());
   } else if (p.sizes == PlacementParams::Sizes::lognormal) {
     const double mu = std::log(p.radius);
     for (auto& v : a) v = std::exp(mu + p.sigma * rs.normal());
@@ -206,15 +214,24 @@ struct HardSpheres {
   double gap;
   std::vector<Vec3> x;
   std::vector<double> a, s;
+  // Segregation: +1 confines the particle to the half z >= 0 of the region, -1 to z <= 0, 0 none.
+  std::vector<signed char> side;
   Grid grid;
 
   HardSpheres(const Region& r, double g, const std::vector<double>& radii, double h)
-      : reg(r), gap(g), x(radii.size(), Vec3::Zero()), a(radii), s(radii.size(), 1.0), grid(r, h, radii.size()) {}
+      : reg(r), gap(g), x(radii.size(), Vec3::Zero()), a(radii), s(radii.size(), 1.0), side(radii.size(), 0),
+        grid(r, h, radii.size()) {}
 
   double r(std::size_t i) const { return s[i] * a[i]; }
-  // Would particle i of radius ri at y overlap a wall or another registered particle (except i)?
-  bool blocked(long i, const Vec3& y, double ri) const {
-    if (reg.room(y) < ri) return true;
+  // Largest radius particle i may have at y (walls, and its half of the region).
+  double room(std::size_t i, const Vec3& y) const {
+    const double w = reg.room(y);
+    return side[i] == 0 ? w : std::min(w, double(side[i]) * y.z());
+  }
+  // Would particle `who` of radius ri at y overlap a wall or another registered particle (except i;
+  // i = -1 while `who` is not registered yet)?
+  bool blocked(long i, std::size_t who, const Vec3& y, double ri) const {
+    if (room(who, y) < ri) return true;
     bool hit = false;
     grid.candidates(y, ri + gap, [&](int j) {
       if (hit || j == i) return;
@@ -223,12 +240,12 @@ struct HardSpheres {
     });
     return hit;
   }
-  // Uniform random point of the region where a sphere of radius ri fits the walls.
-  Vec3 trial_point(RandomStream& rs, double ri) const {
+  // Uniform random point of the region where particle `who` of radius ri fits the walls.
+  Vec3 trial_point(RandomStream& rs, std::size_t who, double ri) const {
     for (;;) {
       Vec3 y;
       for (int c = 0; c < 3; ++c) y[c] = reg.lo()[c] + reg.box[c] * rs.uniform();
-      if (reg.room(y) >= ri) return y;
+      if (room(who, y) >= ri) return y;
     }
   }
 };
@@ -288,8 +305,8 @@ void rsa(HardSpheres& hs, double s0, std::uint64_t seed, double phi_target) {
           << "); use equilibration_sweeps > 0 or a lower volume fraction";
         fail(o.str());
       }
-      y = hs.trial_point(rs, ri);
-    } while (hs.blocked(-1, y, ri));
+      y = hs.trial_point(rs, i, ri);
+    } while (hs.blocked(-1, i, y, ri));
     hs.x[i] = y;
     hs.grid.insert(int(i), y, ri);
   }
@@ -306,7 +323,7 @@ long mc_sweep(HardSpheres& hs, RandomStream& rs, double delta) {
     for (int c = 0; c < 3; ++c) y[c] += delta * (2.0 * rs.uniform() - 1.0);
     hs.reg.wrap(y);
     const double ri = hs.r(i);
-    if (hs.blocked(long(i), y, ri)) continue;
+    if (hs.blocked(long(i), i, y, ri)) continue;
     hs.x[i] = y;
     hs.grid.move(int(i), y, ri);
     ++accepted;
@@ -320,7 +337,7 @@ long grow(HardSpheres& hs, double rate, double room_fraction, double a_median) {
   long below = 0;
   for (std::size_t i = 0; i < hs.a.size(); ++i) {
     if (hs.s[i] >= 1.0) continue;
-    double smax = hs.reg.room(hs.x[i]) / hs.a[i];
+    double smax = hs.room(i, hs.x[i]) / hs.a[i];
     hs.grid.candidates(hs.x[i], hs.a[i] + hs.gap, [&](int j) {
       if (std::size_t(j) == i) return;
       const double d = hs.reg.sep(hs.x[i], hs.x[std::size_t(j)]).norm();
@@ -349,8 +366,10 @@ std::vector<std::size_t> sort_in_space(HardSpheres& hs) {
   std::stable_sort(perm.begin(), perm.end(), [&](std::size_t i, std::size_t j) { return key[i] < key[j]; });
   std::vector<Vec3> x(n);
   std::vector<double> a(n), s(n);
-  for (std::size_t k = 0; k < n; ++k) x[k] = hs.x[perm[k]], a[k] = hs.a[perm[k]], s[k] = hs.s[perm[k]];
-  hs.x = x, hs.a = a, hs.s = s;
+  std::vector<signed char> side(n);
+  for (std::size_t k = 0; k < n; ++k)
+    x[k] = hs.x[perm[k]], a[k] = hs.a[perm[k]], s[k] = hs.s[perm[k]], side[k] = hs.side[perm[k]];
+  hs.x = x, hs.a = a, hs.s = s, hs.side = side;
   hs.grid.clear();
   for (std::size_t k = 0; k < n; ++k) hs.grid.insert(int(k), hs.x[k], hs.r(k));
   return perm;
@@ -377,11 +396,14 @@ Placement place_particles(const PlacementParams& p, const Vec3& box_in) {
     fail("generate = \"lattice\" fills the whole box; in a channel use generate = \"random\"");
   if (p.channel.kind == ChannelParams::Kind::plane) fail("particles are placed in a slit or duct, not beside a plane wall");
   if (p.count < 1) fail("count must be >= 1");
+  if (p.segregation != PlacementParams::Segregation::none && p.pattern == PlacementParams::Pattern::lattice)
+    fail("segregation needs generate = \"random\"");
   if (!(p.radius > 0)) fail("radius must be > 0");
   if (!(p.min_gap >= 0)) fail("min_gap must be >= 0");
   if (p.equilibration_sweeps < 0) fail("equilibration_sweeps must be >= 0");
   Placement out;
-  out.radius = draw_radii(p);
+  std::vector<char> large;
+  out.radius = draw_radii(p, large);
   const std::size_t n = out.radius.size();
   double vol = 0;
   for (double a : out.radius) vol += 4.0 / 3.0 * kPi * a * a * a;
@@ -466,6 +488,13 @@ Placement place_particles(const PlacementParams& p, const Vec3& box_in) {
     fail(o.str());
   }
   HardSpheres hs(reg, p.min_gap, out.radius, h);
+  if (p.segregation != PlacementParams::Segregation::none) {
+    if (reg.periodic || !reg.sphere) fail("segregation needs the open sphere region (region = \"sphere\")");
+    if (p.sizes != PlacementParams::Sizes::bidisperse && p.sizes != PlacementParams::Sizes::bimodal)
+      fail("segregation needs two species (size_distribution = \"bidisperse\" or \"bimodal\")");
+    const signed char up = p.segregation == PlacementParams::Segregation::large_up ? 1 : -1;
+    for (std::size_t i = 0; i < n; ++i) hs.side[i] = large[i] ? up : static_cast<signed char>(-up);
+  }
   if (p.equilibration_sweeps == 0) {
     if (phi > kRsaMaxVolumeFraction * (1 + 1e-9)) {
       std::ostringstream o;

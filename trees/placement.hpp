@@ -6,6 +6,11 @@
 //   bidisperse    a_i = radius (small species) or radius_ratio * radius (large species); exactly
 //                 round(large_fraction * count) large ones, at random indices
 //   lognormal     a_i = exp(ln(radius) + sigma * z_i), z_i standard normal: radius is the median
+//   bimodal       the two species of bidisperse, each spread lognormally about its median:
+//                 a_i = m_i exp(sigma * z_i), m_i = radius or radius_ratio * radius
+//
+// Segregation (open sphere region, two species): the large species is confined to the half z >= 0
+// of the sphere (large_up) or z <= 0 (large_down), the small one to the other half.
 //
 // Hard core: two particles may not come closer than a_i + a_j + min_gap (surface gap >= min_gap);
 // in an open domain a particle stays inside the region (|x_i| <= R - a_i for the sphere of radius
@@ -48,14 +53,15 @@ namespace stokesian {
 
 struct PlacementParams {
   enum class Pattern { random, lattice } pattern = Pattern::random;
-  enum class Sizes { monodisperse, bidisperse, lognormal } sizes = Sizes::monodisperse;
+  enum class Sizes { monodisperse, bidisperse, lognormal, bimodal } sizes = Sizes::monodisperse;
+  enum class Segregation { none, large_up, large_down } segregation = Segregation::none;
   enum class Region { sphere, cube } region = Region::sphere;  // open domains only
   long count = 0;               // number of particles
   double volume_fraction = 0.1; // open domains: phi = sum (4/3) pi a^3 / V_region (periodic: unused)
-  double radius = 1.0;          // monodisperse: a; bidisperse: small radius; lognormal: median [a]
-  double radius_ratio = 2.0;    // bidisperse: large / small radius
-  double large_fraction = 0.5;  // bidisperse: number fraction of large particles
-  double sigma = 0.2;           // lognormal: standard deviation of ln a
+  double radius = 1.0;          // monodisperse: a; bidisperse: small radius; lognormal: median; bimodal: small median [a]
+  double radius_ratio = 2.0;    // bidisperse, bimodal: large / small radius (median)
+  double large_fraction = 0.5;  // bidisperse, bimodal: number fraction of large particles
+  double sigma = 0.2;           // lognormal, bimodal: standard deviation of ln a (of each mode)
   double min_gap = 1e-3;        // hard-core margin: surface gaps >= min_gap [a]
   long equilibration_sweeps = 100;  // random: Monte Carlo sweeps at the target size (0 = plain RSA)
   // Periodic boxes only: confine the particles to the fluid region of these walls (every particle

@@ -3,6 +3,7 @@
 #include "engine/app/check.hpp"
 #include "engine/app/run.hpp"
 #include "engine/app/average.hpp"
+#include "engine/app/clusters.hpp"
 #include "engine/app/sweep.hpp"
 #include "engine/core/errors.hpp"
 #include "engine/progress.hpp"
@@ -224,7 +225,7 @@ int main_cli(int argc, char** argv) {
   const std::string version = std::string("stokesian ") + build::version + " (" + build::git + ", " + build::compiler +
                               ", " + build::build_type + ")";
   app.set_version_flag("--version", version, "Print the version and build, then exit");
-  app.require_subcommand(1);  // one of run, solve, check, plot, sweep, average
+  app.require_subcommand(1);  // one of run, solve, check, plot, sweep, average, clusters
   app.footer(
       "Exit status: 0 success, 1 usage, 2 scene/config error (also: more memory than available), 3 physics error,\n"
       "4 file error, 5 out of memory although the estimate fitted, 6 a sweep ended with failed or unfinished runs.\n"
@@ -338,6 +339,21 @@ int main_cli(int argc, char** argv) {
   average_cmd->add_option("--observables", observables_text, "Comma-separated observable names; default all")
       ->type_name("NAMES");
 
+  CLI::App* clusters_cmd = app.add_subcommand(
+      "clusters", "Cluster analysis of a trajectory: clusters by surface gap, sizes, shapes, fractal dimension (docs/clusters.md)");
+  std::string clusters_file;
+  ClusterOptions cluster_opt;
+  clusters_cmd->add_option("trajectory", clusters_file, "Trajectory written by run")->required()->type_name("FILE.h5");
+  clusters_cmd->add_option("--gap", cluster_opt.bond_gap, "Bond criterion: surface gap <= GAP [a]")
+      ->type_name("GAP")
+      ->default_str("0.1");
+  clusters_cmd->add_option("--min-size", cluster_opt.min_size, "Smallest cluster size in the fractal-dimension fit")
+      ->type_name("N")
+      ->default_str("4");
+  clusters_cmd->add_option("--every", cluster_opt.every, "Analyse every N-th frame")->type_name("N")->default_str("1");
+  clusters_cmd->add_option("--out", cluster_opt.out, "HDF5 output (default: TRAJECTORY.clusters.h5 beside it)")
+      ->type_name("FILE.h5");
+
   // A first word that is neither an option nor a command: name it (CLI11 would only say that a
   // command is required).
   const auto is_command = [&](const char* w) {
@@ -346,7 +362,7 @@ int main_cli(int argc, char** argv) {
     return false;
   };
   if (argc > 1 && argv[1][0] != '-' && !is_command(argv[1])) {
-    std::fprintf(stderr, "stokesian: unknown command \"%s\"; commands: run, solve, check, plot, sweep, average\n%s", argv[1],
+    std::fprintf(stderr, "stokesian: unknown command \"%s\"; commands: run, solve, check, plot, sweep, average, clusters\n%s", argv[1],
                  "Run `stokesian --help` for usage.\n");
     return 1;
   }
@@ -389,6 +405,11 @@ int main_cli(int argc, char** argv) {
     Activity activity;
     activity.doing = "averaging";
     return guarded(activity, [&]() -> int { return app::average(average_file, opt, stdout); });
+  }
+  if (clusters_cmd->parsed()) {
+    Activity activity;
+    activity.doing = "analysing clusters";
+    return guarded(activity, [&]() -> int { return app::clusters(clusters_file, cluster_opt, stdout); });
   }
   if (sweep_cmd->parsed()) {
     sweep_opt.jobs = std::stoi(jobs_text);

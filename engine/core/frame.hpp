@@ -39,6 +39,7 @@ struct FieldSpec {
 // mu (reference viscosity), kT (reference thermal energy), factors separated by spaces.
 namespace units {
 inline const std::string length = "a";
+inline const std::string area = "a+2";
 inline const std::string time = "mu a+3 kT-1";
 inline const std::string velocity = "kT mu-1 a-2";
 inline const std::string angular_velocity = "kT mu-1 a-3";

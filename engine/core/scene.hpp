@@ -211,7 +211,15 @@ struct OutputParams {
   bool xyz = false;
   std::string xyz_path;
   std::string author;                  // H5MD /h5md/author name; "" = the login name of the user
+  // Cloud observables (engine/observers.cpp, docs/clouds.md): on for a settling cloud (resolved at
+  // load: open domain, [forces] gravity, no walls, no inflow, unless set). Friends-of-friends
+  // linking length [a] (resolved at load: kCloudLinkSpacings mean centre spacings of the initial
+  // cloud) and the smallest share of the particles that counts as a cloud.
+  bool cloud = false;
+  double cloud_link = 0.0;
+  double cloud_min_fraction = 0.05;
 };
+inline constexpr double kCloudLinkSpacings = 1.5;
 
 // What a run does when its state goes bad (docs/reliability.md, "Failure policies during a run").
 struct RunPolicy {
