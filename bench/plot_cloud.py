@@ -2,8 +2,8 @@
 """Chart the cloud settling validation (bench/validate_cloud.cpp, issue 18).
 
   (a) monodisperse clouds: measured mean velocity / the thesis's eq. 4.6 against phi, one colour per
-      N (mean over seeds, bars = spread min..max); dashed: Nitsche & Batchelor's form (4.6 + U_St)
-      over 4.6, the expected ratio for point forces;
+      N (mean over seeds, bars = spread min..max, filled circles); open squares, dashed: measured /
+      Nitsche & Batchelor's form (4.6 + U_St) with the radius R_eff of the sphere the centres fill;
   (b) the same for lognormal LN(-0.35, 0.04) radii;
   (c) bidisperse clouds (N = 1000, phi = 0.05, lambda = 0.5): measured and eq. 4.6 against the
       number fraction nu of small spheres (units of the large spheres' U0).
@@ -40,27 +40,28 @@ for kind, ax in ((0, axs[0]), (1, axs[1])):
     g = groups(kind, ("N", "phi"))
     Ns = sorted({k[0] for k in g})
     print(f"\n{names[kind]}: U_sim / U_(4.6) (mean over seeds; min..max); U_(4.6) and NB ratio (4.6 + <U_St>)/(4.6)\n")
-    print("| N | phi | U_(4.6) / U0 | U_sim / U0 | U_sim / U_(4.6) | spread | (4.6 + U_St) / 4.6 |")
-    print("|---|---|---|---|---|---|---|")
+    print("| N | phi | U_(4.6) / U0 | U_sim / U0 | U_sim / U_(4.6) | spread | (4.6 + U_St) / 4.6 | U_sim / U_NB(R_eff) |")
+    print("|---|---|---|---|---|---|---|---|")
     for i, N in enumerate(Ns):
         phis = sorted(k[1] for k in g if k[0] == N)
         ratio = [np.array([v["U_sim"] / v["U_formula"] for v in g[(N, p)]]) for p in phis]
         nb = [np.mean([v["U_nb"] / v["U_formula"] for v in g[(N, p)]]) for p in phis]
+        eff = [np.mean([v["U_sim"] / v["U_nb_eff"] for v in g[(N, p)]]) for p in phis]
         m = np.array([r.mean() for r in ratio])
         lo = m - np.array([r.min() for r in ratio])
         hi = np.array([r.max() for r in ratio]) - m
         c = f"C{i}"
         ax.errorbar(phis, m, yerr=[lo, hi], fmt="o-", color=c, capsize=3, label=f"N = {int(N)}")
-        ax.plot(phis, nb, "--", color=c, alpha=0.7)
-        for p, r, q in zip(phis, ratio, nb):
+        ax.plot(phis, eff, "s--", color=c, mfc="none", alpha=0.8)
+        for p, r, q, e in zip(phis, ratio, nb, eff):
             vs = g[(N, p)]
             print(f"| {int(N)} | {p:g} | {np.mean([v['U_formula'] for v in vs]):.2f} | {np.mean([v['U_sim'] for v in vs]):.2f} "
-                  f"| {r.mean():.4f} | {r.min():.4f}..{r.max():.4f} | {q:.4f} |")
+                  f"| {r.mean():.4f} | {r.min():.4f}..{r.max():.4f} | {q:.4f} | {e:.4f} |")
     ax.axhline(1.0, color="k", lw=0.8)
     ax.set_xlabel(r"volume fraction $\phi$")
-    ax.set_ylabel(r"$U_{\rm sim} / U_{(4.6)}$")
-    ax.set_title(f"({'ab'[kind]}) {names[kind]}: measured / eq. 4.6\n(dashed: Nitsche-Batchelor, 4.6 + $U_{{St}}$)",
-                 fontsize=10)
+    ax.set_ylabel(r"measured $U_c$ / prediction")
+    ax.set_title(f"({'ab'[kind]}) {names[kind]}: measured / eq. 4.6 (filled)\n"
+                 f"measured / (4.6 + $U_{{St}}$) with the centres' radius (open, dashed)", fontsize=10)
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
 
@@ -79,10 +80,11 @@ ax.set_title(r"(c) bidisperse, N = 1000, $\phi$ = 0.05, $\lambda$ = 0.5", fontsi
 ax.legend(fontsize=8)
 ax.grid(alpha=0.3)
 print("\nbidisperse N = 1000, phi = 0.05, lambda = 0.5\n")
-print("| nu | U_(4.6) / U0 | U_sim / U0 | ratio |")
-print("|---|---|---|---|")
-for n, s, f in zip(nus, sim, form):
-    print(f"| {n:g} | {f:.2f} | {s:.2f} | {s / f:.4f} |")
+eff = [np.mean([v["U_sim"] / v["U_nb_eff"] for v in g[(n,)]]) for n in nus]
+print("| nu | U_(4.6) / U0 | U_sim / U0 | U_sim / U_(4.6) | U_sim / U_NB(R_eff) |")
+print("|---|---|---|---|---|")
+for n, s, f, e in zip(nus, sim, form, eff):
+    print(f"| {n:g} | {f:.2f} | {s:.2f} | {s / f:.4f} | {e:.4f} |")
 fig.tight_layout()
 fig.savefig(out, dpi=110)
 print(f"\nwrote {out}")
