@@ -21,6 +21,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <random>
 #include <regex>
 #include <set>
 #include <sstream>
@@ -403,4 +405,75 @@ steps = 1
   }
   CHECK(documented("### Observables") == observables);
   CHECK(documented("### Per-particle elements") == elements);
+}
+
+TEST_CASE("cloud observables: a uniform sphere, two clouds and stragglers, a torus") {
+  TempDir tmp;
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  // Points uniform in a ball of radius R about c (rejection sampling).
+  auto ball = [&](std::vector<Vec3>& x, int n, double R, const Vec3& c) {
+    while (n > 0) {
+      const Vec3 p(u(rng), u(rng), u(rng));
+      if (p.squaredNorm() > 1.0) continue;
+      x.push_back(c + R * p);
+      --n;
+    }
+  };
+  // Tiny spheres (no overlaps), free draining, gravity: the cloud observables are on by default.
+  auto observe = [&](const std::vector<Vec3>& x, const std::string& name) {
+    std::ostringstream o;
+    o.precision(17);
+    o << "[particles]\nradius = 0.01\npositions = [";
+    for (std::size_t i = 0; i < x.size(); ++i) o << (i ? ", " : "") << "[" << x[i].x() << ", " << x[i].y() << ", " << x[i].z() << "]";
+    o << "]\n[forces]\ngravity = [0.0, 0.0, -1.0]\n[hydrodynamics]\nmodel = \"free_draining\"\n[time]\ndt = 0.001\nsteps = 1\n";
+    run_scene(o.str(), tmp / name);
+    std::map<std::string, std::vector<double>> first;  // each observable's first frame
+    for (const auto& s : io::read_observables(tmp / name))
+      first[s.name] = std::vector<double>(s.value.begin(), s.value.begin() + long(s.components));
+    return first;
+  };
+  std::vector<Vec3> one;
+  const double R = 30.0;
+  ball(one, 2000, R, Vec3(5, -3, 100));
+  auto ob = observe(one, "one.h5");
+  CHECK(ob["cloud_particles"][0] == 2000);
+  CHECK(ob["cloud_lost"][0] == 0);
+  CHECK(ob["cloud_parts"][0] == 1);
+  // Sampling errors for 2000 points: axis share binomial sd 0.0065; radius and gyration ~1 %.
+  CHECK(ob["cloud_axis_fraction"][0] == doctest::Approx(1.0 - std::pow(15.0 / 16.0, 1.5)).epsilon(0.25));
+  CHECK(ob["cloud_radius"][0] == doctest::Approx(R).epsilon(0.03));
+  for (double g : ob["cloud_gyration"]) CHECK(g == doctest::Approx(R * R / 5.0).epsilon(0.08));
+  CHECK(ob["cloud_centroid"][2] == doctest::Approx(100.0).epsilon(0.01));
+  // Free draining: every sphere falls at g a^2 / (6 pi).
+  CHECK(ob["cloud_velocity"][2] == doctest::Approx(-1e-4 / (6.0 * M_PI)).epsilon(1e-9));
+  CHECK(ob["mean_velocity"][2] == doctest::Approx(-1e-4 / (6.0 * M_PI)).epsilon(1e-9));
+
+  // Two clouds far apart and three stragglers: two parts, three lost.
+  std::vector<Vec3> two;
+  ball(two, 600, 20.0, Vec3(0, 0, 0));
+  ball(two, 400, 20.0, Vec3(300, 0, 0));
+  for (double z : {-200.0, -260.0, -320.0}) two.push_back(Vec3(0, 0, z));
+  ob = observe(two, "two.h5");
+  CHECK(ob["cloud_parts"][0] == 2);
+  CHECK(ob["cloud_lost"][0] == 3);
+  CHECK(ob["cloud_particles"][0] == 1000);
+  CHECK(ob["cloud_centroid"][0] == doctest::Approx(120.0).epsilon(0.02));  // (600 * 0 + 400 * 300) / 1000
+
+  // A torus (ring radius 20, tube radius 6, axis along gravity): no sphere near the axis.
+  std::vector<Vec3> torus;
+  std::uniform_real_distribution<double> angle(0.0, 2.0 * M_PI);
+  while (torus.size() < 2000) {
+    const double t = angle(rng);
+    const Vec3 p(6.0 * u(rng), 6.0 * u(rng), 6.0 * u(rng));
+    if (p.squaredNorm() > 36.0) continue;
+    const double rho = 20.0 + p.x();
+    torus.push_back(Vec3(rho * std::cos(t), rho * std::sin(t), p.z()));
+  }
+  ob = observe(torus, "torus.h5");
+  CHECK(ob["cloud_parts"][0] == 1);
+  CHECK(ob["cloud_axis_fraction"][0] == 0.0);
+  const auto& g = ob["cloud_gyration"];  // flattened: two large in-plane values, one small
+  CHECK(g[0] == doctest::Approx(g[1]).epsilon(0.1));
+  CHECK(g[2] < 0.1 * g[0]);
 }
