@@ -16,8 +16,9 @@
 // number fraction of small spheres nu = 0..0.95. Kinds 0 and 1: N = 1000, 2500, 5000 at the
 // thesis's 12 volume fractions 0.01..0.2; kind 2: N = 1000, phi = 0.05 (thesis fig. 4.9); 4 seeds.
 // Rows: kind, N, phi, nu, lambda, seed; values U_sim, U_formula, U_nb, U_formula_eff, U_nb_eff
-// (units of U0), R (a_c), R_eff, seconds. Usage: validate_cloud [--quick] [--out DIR]; --quick: N = 1000, phi = 0.01, 0.1, one
-// seed. Full: about 1 min.
+// (units of U0), R (a_c), R_eff, seconds.
+// Usage: validate_cloud [--quick] [--out DIR]; --quick: N = 1000, phi = 0.01, 0.1, one seed.
+// Full: about 1 min on one core.
 #include "bench/harness.hpp"
 #include "engine/kernels/far_field.hpp"
 #include "trees/placement.hpp"

@@ -9,8 +9,8 @@
 #include <random>
 
 using namespace stokesian;
-using trees::ClusterShape;
 using trees::Clusters;
+using trees::ClusterShape;
 
 namespace {
 
@@ -69,7 +69,8 @@ TEST_CASE("find_clusters equals its plain twin: open, periodic and sheared boxes
         CHECK(fast.members == ref.members);
         CHECK(fast.bonds.size() == ref.bonds.size());
         // Sizes non-increasing; every bond inside one cluster; a skipped sphere in none.
-        for (std::size_t k = 1; k < fast.members.size(); ++k) CHECK(fast.members[k].size() <= fast.members[k - 1].size());
+        for (std::size_t k = 1; k < fast.members.size(); ++k)
+          CHECK(fast.members[k].size() <= fast.members[k - 1].size());
         for (const auto& b : fast.bonds) CHECK(fast.label[std::size_t(b.i)] == fast.label[std::size_t(b.j)]);
         if (sk)
           for (std::size_t i = 0; i < skip.size(); ++i)
@@ -83,7 +84,7 @@ TEST_CASE("bonds by surface gap: a chain holds together at its spacing, breaks b
   std::vector<double> a;
   add_chain(x, a, Vec3(0, 0, 0), Vec3(1, 0, 0), 5, 1.0, 2.08);   // gaps 0.08
   add_chain(x, a, Vec3(0, 10, 0), Vec3(0, 0, 1), 2, 1.0, 2.04);  // a doublet, gap 0.04
-  x.push_back(Vec3(30, 30, 30));                                   // a single sphere
+  x.push_back(Vec3(30, 30, 30));                                 // a single sphere
   a.push_back(2.0);
   const Clusters c = trees::find_clusters(x, a, open_domain(), 0.1);
   REQUIRE(c.members.size() == 3);

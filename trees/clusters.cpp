@@ -91,7 +91,8 @@ Clusters find_clusters(const std::vector<Vec3>& x, const std::vector<double>& ra
 }
 
 Clusters link_by_centres(const std::vector<Vec3>& x, const Domain& domain, double link, const std::vector<char>* skip) {
-  if (!(link > 0.0) || !std::isfinite(link)) throw std::invalid_argument("clusters: the linking length must be finite and > 0");
+  if (!(link > 0.0) || !std::isfinite(link))
+    throw std::invalid_argument("clusters: the linking length must be finite and > 0");
   return find_clusters(x, std::vector<double>(x.size(), 0.0), domain, link, skip);
 }
 
@@ -132,7 +133,8 @@ std::vector<ClusterShape> cluster_shapes(const Clusters& c, const std::vector<Ve
                                          const std::vector<Vec3>& velocity) {
   const std::size_t n = x.size();
   if (c.label.size() != n || radius.size() != n) throw std::invalid_argument("cluster_shapes: sizes differ");
-  if (!velocity.empty() && velocity.size() != n) throw std::invalid_argument("cluster_shapes: velocities differ in number");
+  if (!velocity.empty() && velocity.size() != n)
+    throw std::invalid_argument("cluster_shapes: velocities differ in number");
   // Unwrap each cluster along its bonds (breadth first from its lowest member); a bond that closes a
   // cycle with a different lattice vector marks the cluster as spanning.
   std::vector<Vec3> u(x.begin(), x.end());
@@ -140,7 +142,7 @@ std::vector<ClusterShape> cluster_shapes(const Clusters& c, const std::vector<Ve
   if (domain.periodic()) {
     std::vector<std::vector<std::pair<int, Vec3>>> adj(n);
     for (const auto& b : c.bonds) {
-      adj[std::size_t(b.i)].push_back({b.j, b.r});   // u_i = u_j + r  =>  u_j = u_i - r
+      adj[std::size_t(b.i)].push_back({b.j, b.r});  // u_i = u_j + r  =>  u_j = u_i - r
       adj[std::size_t(b.j)].push_back({b.i, -b.r});
     }
     std::vector<char> seen(n, 0);
@@ -199,11 +201,12 @@ std::vector<ClusterShape> cluster_shapes(const Clusters& c, const std::vector<Ve
       }
     }
     s.feret = feret;
-    if (domain.periodic()) s.centre = [&] {  // report the centre inside the box
-      Vec3 cc = s.centre;
-      domain.wrap(cc);
-      return cc;
-    }();
+    if (domain.periodic())
+      s.centre = [&] {  // report the centre inside the box
+        Vec3 cc = s.centre;
+        domain.wrap(cc);
+        return cc;
+      }();
   }
   return out;
 }

@@ -59,12 +59,12 @@ Clusters find_clusters_reference(const std::vector<Vec3>& x, const std::vector<d
 
 struct ClusterShape {
   long size = 0;
-  double mass = 0.0;             // sum a_i^3 [a^3]
-  Vec3 centre = Vec3::Zero();    // mass-weighted [a]
+  double mass = 0.0;                // sum a_i^3 [a^3]
+  Vec3 centre = Vec3::Zero();       // mass-weighted [a]
   double radius_of_gyration = 0.0;  // [a]
-  double feret = 0.0;            // maximum Feret diameter [a]
-  Vec3 velocity = Vec3::Zero();  // mass-weighted; zero when no velocities are given
-  bool spanning = false;         // periodic: winds around the box (centre, R_g, D_F are NaN)
+  double feret = 0.0;               // maximum Feret diameter [a]
+  Vec3 velocity = Vec3::Zero();     // mass-weighted; zero when no velocities are given
+  bool spanning = false;            // periodic: winds around the box (centre, R_g, D_F are NaN)
 };
 
 // Shapes of every cluster, in the numbering of `c`. velocity may be empty.

@@ -29,7 +29,7 @@ int clusters(const std::string& trajectory, const ClusterOptions& opt, std::FILE
     std::int64_t step;
     double time;
     long particles, clusters, largest;
-    double mean_size, weight_mean_size;
+    double mean_size, weight_mean_size, mean_radius;
     trees::FractalFit fractal;
     std::vector<long> histogram;
   };
@@ -39,13 +39,14 @@ int clusters(const std::string& trajectory, const ClusterOptions& opt, std::FILE
     c.name = name;
     return c;
   };
-  io::TableColumn c_frame = column("frame"), c_size = column("size"), c_mass = column("mass"), c_x = column("centre_x"), c_y = column("centre_y"), c_z = column("centre_z"),
-      c_rg = column("radius_of_gyration"), c_feret = column("feret_diameter"), c_vx = column("velocity_x"), c_vy = column("velocity_y"), c_vz = column("velocity_z"),
-      c_span = column("spanning");
+  io::TableColumn c_frame = column("frame"), c_size = column("size"), c_mass = column("mass"), c_x = column("centre_x"),
+                  c_y = column("centre_y"), c_z = column("centre_z"), c_rg = column("radius_of_gyration"),
+                  c_feret = column("feret_diameter"), c_vx = column("velocity_x"), c_vy = column("velocity_y"),
+                  c_vz = column("velocity_z"), c_span = column("spanning");
   const bool velocities = info.records("velocity");
   std::fprintf(out, "# %s: clusters by surface gap <= %g a (docs/clusters.md)\n", trajectory.c_str(), opt.bond_gap);
-  std::fprintf(out, "# %10s %12s %9s %9s %9s %9s %9s %9s %9s %8s\n", "step", "time", "particles", "clusters", "singlets",
-               "doublets", "triplets", "largest", "mean", "D_f");
+  std::fprintf(out, "# %10s %12s %9s %9s %9s %9s %9s %9s %9s %8s\n", "step", "time", "particles", "clusters",
+               "singlets", "doublets", "triplets", "largest", "mean", "D_f");
   for (std::int64_t k = 0; k < info.frames; k += opt.every) {
     const io::Snapshot f = io::read_frame(trajectory, k, false);
     const std::size_t n = f.position.size();
@@ -86,7 +87,8 @@ int clusters(const std::string& trajectory, const ClusterOptions& opt, std::FILE
     r.largest = c.members.empty() ? 0 : long(c.members[0].size());
     r.mean_size = r.clusters ? double(r.particles) / double(r.clusters) : NAN;
     r.weight_mean_size = r.particles ? sum_n2 / double(r.particles) : NAN;
-    r.fractal = trees::fractal_dimension(shapes, r.particles ? sum_a / double(r.particles) : 1.0, opt.min_size);
+    r.mean_radius = r.particles ? sum_a / double(r.particles) : NAN;
+    r.fractal = trees::fractal_dimension(shapes, r.particles ? r.mean_radius : 1.0, opt.min_size);
     const double frame = double(rows.size());
     for (const auto& s : shapes) {
       c_frame.num.push_back(frame);
@@ -116,7 +118,8 @@ int clusters(const std::string& trajectory, const ClusterOptions& opt, std::FILE
   io::Matrix2D hist{"size_histogram", nf, width, std::vector<double>(nf * width, 0.0)};
   io::Matrix2D rate{"growth_rate", nf, width, std::vector<double>(nf * width, NAN)};
   for (std::size_t k = 0; k < nf; ++k)
-    for (std::size_t s = 1; s < rows[k].histogram.size(); ++s) hist.data[k * width + s - 1] = double(rows[k].histogram[s]);
+    for (std::size_t s = 1; s < rows[k].histogram.size(); ++s)
+      hist.data[k * width + s - 1] = double(rows[k].histogram[s]);
   if (nf >= 2)
     for (std::size_t k = 0; k < nf; ++k) {
       const std::size_t lo = k == 0 ? 0 : k - 1, hi = k + 1 == nf ? k : k + 1;
@@ -124,9 +127,10 @@ int clusters(const std::string& trajectory, const ClusterOptions& opt, std::FILE
       for (std::size_t s = 0; s < width; ++s)
         rate.data[k * width + s] = dt > 0 ? (hist.data[hi * width + s] - hist.data[lo * width + s]) / dt : NAN;
     }
-  io::TableColumn f_step = column("step"), f_time = column("time"), f_particles = column("particles"), f_clusters = column("clusters"), f_largest = column("largest"),
-      f_mean = column("mean_size"), f_wmean = column("weight_mean_size"), f_df = column("fractal_dimension"), f_kf = column("fractal_prefactor"),
-      f_dfn = column("fractal_clusters");
+  io::TableColumn f_step = column("step"), f_time = column("time"), f_particles = column("particles"),
+                  f_clusters = column("clusters"), f_largest = column("largest"), f_mean = column("mean_size"),
+                  f_wmean = column("weight_mean_size"), f_df = column("fractal_dimension"),
+                  f_kf = column("fractal_prefactor"), f_ma = column("mean_radius"), f_dfn = column("fractal_clusters");
   for (const Row& r : rows) {
     f_step.num.push_back(double(r.step));
     f_time.num.push_back(r.time);
@@ -137,17 +141,18 @@ int clusters(const std::string& trajectory, const ClusterOptions& opt, std::FILE
     f_wmean.num.push_back(r.weight_mean_size);
     f_df.num.push_back(r.fractal.dimension);
     f_kf.num.push_back(r.fractal.prefactor);
+    f_ma.num.push_back(r.mean_radius);
     f_dfn.num.push_back(double(r.fractal.clusters));
   }
   char gap[64], ms[32];
   std::snprintf(gap, sizeof gap, "%.17g", opt.bond_gap);
   std::snprintf(ms, sizeof ms, "%ld", opt.min_size);
-  io::write_tables_h5(path,
-                      {{"frames", {f_step, f_time, f_particles, f_clusters, f_largest, f_mean, f_wmean, f_df, f_kf, f_dfn}},
-                       {"clusters", {c_frame, c_size, c_mass, c_x, c_y, c_z, c_rg, c_feret, c_vx, c_vy, c_vz, c_span}}},
-                      {hist, rate},
-                      {{"trajectory", trajectory}, {"bond_gap", gap}, {"fractal_min_size", ms},
-                       {"definitions", "docs/clusters.md"}});
+  io::write_tables_h5(
+      path,
+      {{"frames", {f_step, f_time, f_particles, f_clusters, f_largest, f_mean, f_wmean, f_ma, f_df, f_kf, f_dfn}},
+       {"clusters", {c_frame, c_size, c_mass, c_x, c_y, c_z, c_rg, c_feret, c_vx, c_vy, c_vz, c_span}}},
+      {hist, rate},
+      {{"trajectory", trajectory}, {"bond_gap", gap}, {"fractal_min_size", ms}, {"definitions", "docs/clusters.md"}});
   std::fprintf(out, "# wrote %s\n", path.c_str());
   return 0;
 }

@@ -13,10 +13,10 @@
 namespace stokesian::app {
 
 struct ClusterOptions {
-  double bond_gap = 0.1;   // [a]: spheres with surface gap <= bond_gap are bonded
-  long min_size = 4;       // clusters of at least this size enter the fractal-dimension fit
-  long every = 1;          // analyse every k-th frame
-  std::string out;         // HDF5 output; default <trajectory without .h5>.clusters.h5
+  double bond_gap = 0.1;  // [a]: spheres with surface gap <= bond_gap are bonded
+  long min_size = 4;      // clusters of at least this size enter the fractal-dimension fit
+  long every = 1;         // analyse every k-th frame
+  std::string out;        // HDF5 output; default <trajectory without .h5>.clusters.h5
 };
 
 // Throws IoError for an unreadable trajectory, ConfigError for a bad option (naming it and its range).
