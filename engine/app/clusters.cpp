@@ -145,7 +145,7 @@ int clusters(const std::string& trajectory, const ClusterOptions& opt, std::FILE
     f_dfn.num.push_back(double(r.fractal.clusters));
   }
   char gap[64], ms[32];
-  std::snprintf(gap, sizeof gap, "%.17g", opt.bond_gap);
+  std::snprintf(gap, sizeof gap, "%.10g", opt.bond_gap);
   std::snprintf(ms, sizeof ms, "%ld", opt.min_size);
   io::write_tables_h5(
       path,
