@@ -412,6 +412,31 @@ class CloudOutputs final : public Observer {
   Vec3 axis_;
 };
 
+// In-run cluster counts ([output] cluster_gap; definitions in trees/clusters.hpp, docs/clusters.md):
+// clusters of the interior, mobile particles by surface gap <= cluster_gap; singlets, doublets and
+// triplets, and the largest cluster's size.
+class ClusterCounts final : public Observer {
+ public:
+  explicit ClusterCounts(const Scene& scene) : gap_(scene.output.cluster_gap), walls_(scene.wall_count) {}
+  void observe(const State& s, const Evaluation&, Frame& f) const override {
+    std::vector<char> skip(s.size(), 0);
+    for (std::size_t i = 0; i < s.size(); ++i)
+      skip[i] = (!s.fixed.empty() && s.fixed[i]) || i >= s.size() - std::min(s.size(), walls_);
+    const trees::Clusters c = trees::find_clusters(s.position, s.radius, s.domain, gap_, &skip);
+    const std::vector<long> h = trees::size_histogram(c);
+    auto count = [&](std::size_t n) { return std::int64_t(n < h.size() ? h[n] : 0); };
+    f.set_count("clusters", std::int64_t(c.members.size()));
+    f.set_count("clusters_singlets", count(1));
+    f.set_count("clusters_doublets", count(2));
+    f.set_count("clusters_triplets", count(3));
+    f.set_count("clusters_largest", std::int64_t(c.members.empty() ? 0 : c.members[0].size()));
+  }
+
+ private:
+  double gap_;
+  std::size_t walls_;
+};
+
 class Gaps final : public Observer {
  public:
   void observe(const State& s, const Evaluation& ev, Frame& f) const override {
@@ -463,6 +488,7 @@ std::vector<std::unique_ptr<Observer>> make_observers(const Scene& scene, const 
   if (scene.domain.periodic()) obs.push_back(std::make_unique<BulkStress>(scene, model));
   if (scene.walls.any()) obs.push_back(std::make_unique<ChannelOutputs>(scene));
   if (scene.output.cloud) obs.push_back(std::make_unique<CloudOutputs>(scene));
+  if (scene.output.cluster_gap >= 0.0) obs.push_back(std::make_unique<ClusterCounts>(scene));
   obs.push_back(std::make_unique<Gaps>());
   obs.push_back(std::make_unique<RunStatistics>());
   return obs;

@@ -1081,7 +1081,8 @@ Scene parse_scene(const toml::table& root, const std::string& source) {
   s.time.rkf_tolerance = R.number(ti, "time", "rkf_tolerance", 1e-6, 1e-14, 1.0);
 
   const toml::table& out = sub(R, root, "output");
-  R.only(out, "output", {"every", "checkpoint_every", "record", "xyz", "author", "cloud", "cloud_link", "cloud_min_fraction"});
+  R.only(out, "output", {"every", "checkpoint_every", "record", "xyz", "author", "cloud", "cloud_link", "cloud_min_fraction",
+                          "cluster_gap"});
   s.output.every = R.integer(out, "output", "every", 1, 1, std::numeric_limits<long>::max());
   s.output.checkpoint_every = R.integer(out, "output", "checkpoint_every", 0, 0, std::numeric_limits<long>::max());
   if (s.output.checkpoint_every > 0 && s.output.checkpoint_every % s.output.every != 0)
@@ -1129,6 +1130,7 @@ Scene parse_scene(const toml::table& root, const std::string& source) {
     }
     s.output.cloud_link = R.number(out, "output", "cloud_link", link > 0 ? link : 1.0, 0.0, 1e12, true);
   }
+  if (out.contains("cluster_gap")) s.output.cluster_gap = R.number(out, "output", "cluster_gap", 0.1, 0.0, 1e6);
 
   if (const toml::node* rn = R.get(out, "output", "record")) {
     const toml::array* a = rn->as_array();
@@ -1282,6 +1284,7 @@ std::string resolved_toml(const Scene& s) {
                                     {"cloud", s.output.cloud},
                                     {"cloud_link", s.output.cloud_link},
                                     {"cloud_min_fraction", s.output.cloud_min_fraction}});
+  if (s.output.cluster_gap >= 0.0) root["output"].as_table()->insert("cluster_gap", s.output.cluster_gap);
   if (!s.output.xyz || s.output.xyz_path.empty()) root["output"].as_table()->insert("xyz", s.output.xyz);
   else root["output"].as_table()->insert("xyz", s.output.xyz_path);
   std::ostringstream o;

@@ -459,6 +459,8 @@ model = "free_draining"
 [time]
 dt = 0.1
 steps = 2
+[output]
+cluster_gap = 0.06
 )");
   const std::string h5 = (scratch() / "cl.h5").string();
   REQUIRE(cli("run " + scene.string() + " --out " + h5 + " --quiet").status == 0);
@@ -467,6 +469,12 @@ steps = 2
   REQUIRE(r.status == 0);
   CHECK(contains(r.out, "clusters by surface gap <= 0.06 a"));
   CHECK(test::read_doubles(out, "frames/clusters") == std::vector<double>{4, 4, 4});
+  // The run's own counts ([output] cluster_gap) agree.
+  CHECK(test::read_doubles(h5, "observables/clusters/value") == std::vector<double>{4, 4, 4});
+  CHECK(test::read_doubles(h5, "observables/clusters_singlets/value") == std::vector<double>{2, 2, 2});
+  CHECK(test::read_doubles(h5, "observables/clusters_doublets/value") == std::vector<double>{1, 1, 1});
+  CHECK(test::read_doubles(h5, "observables/clusters_triplets/value") == std::vector<double>{1, 1, 1});
+  CHECK(test::read_doubles(h5, "observables/clusters_largest/value") == std::vector<double>{3, 3, 3});
   CHECK(test::read_doubles(out, "frames/particles") == std::vector<double>{7, 7, 7});
   CHECK(test::read_doubles(out, "frames/largest") == std::vector<double>{3, 3, 3});
   // Histogram rows: 2 singlets, 1 doublet, 1 triplet; nothing changes, so every growth rate is 0.

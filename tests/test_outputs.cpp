@@ -390,6 +390,8 @@ model = "far_field"
 [time]
 dt = 0.1
 steps = 1
+[output]
+cluster_gap = 0.1
 )";
   run_scene(cloud, tmp / "f.h5");
   run_scene(outline, tmp / "e.h5");

@@ -218,6 +218,8 @@ struct OutputParams {
   bool cloud = false;
   double cloud_link = 0.0;
   double cloud_min_fraction = 0.05;
+  // In-run cluster counts (docs/clusters.md): bonds h_ij <= cluster_gap [a]; < 0 = not recorded.
+  double cluster_gap = -1.0;
 };
 inline constexpr double kCloudLinkSpacings = 1.5;
 
