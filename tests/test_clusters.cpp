@@ -16,14 +16,6 @@ namespace {
 
 Domain open_domain() { return Domain{}; }
 
-Domain periodic_box(const Vec3& L, double strain = 0.0) {
-  Domain d;
-  d.kind = Domain::Kind::periodic;
-  d.box = L;
-  d.shear_strain = strain;
-  return d;
-}
-
 // A straight chain of n spheres of radius a along `dir`, centre spacing s, starting at x0.
 void add_chain(std::vector<Vec3>& x, std::vector<double>& a, const Vec3& x0, const Vec3& dir, int n, double radius,
                double s) {
@@ -51,7 +43,7 @@ TEST_CASE("find_clusters equals its plain twin: open, periodic and sheared boxes
   for (int box_kind = 0; box_kind < 3; ++box_kind)
     for (double gap : {0.0, 0.05, 0.3, 1.0}) {
       const Vec3 L(18.0, 14.0, 16.0);
-      const Domain d = box_kind == 0 ? open_domain() : periodic_box(L, box_kind == 2 ? 0.37 : 0.0);
+      const Domain d = box_kind == 0 ? open_domain() : Domain::periodic_box(L, box_kind == 2 ? 0.37 : 0.0);
       std::vector<Vec3> x;
       std::vector<double> a;
       for (int i = 0; i < 300; ++i) {
@@ -166,7 +158,7 @@ TEST_CASE("fractal dimension: chains give 1, compact cubic blocks give 3") {
 TEST_CASE("periodic boxes: clusters unwrap across the boundary; a cluster around the box is spanning") {
   const Vec3 L(20.0, 20.0, 20.0);
   for (double strain : {0.0, 0.3}) {
-    const Domain d = periodic_box(L, strain);
+    const Domain d = Domain::periodic_box(L, strain);
     std::vector<Vec3> x;
     std::vector<double> a;
     add_chain(x, a, Vec3(16.0, 5.0, 5.0), Vec3(1, 0, 0), 6, 1.0, 2.02);  // crosses x = 20
@@ -184,9 +176,9 @@ TEST_CASE("periodic boxes: clusters unwrap across the boundary; a cluster around
     std::vector<Vec3> ring;
     std::vector<double> ra;
     add_chain(ring, ra, Vec3(0.5, 3.0, 3.0), Vec3(1, 0, 0), 10, 1.0, 2.0);
-    const Clusters cr = trees::find_clusters(ring, ra, periodic_box(L), 0.01);
+    const Clusters cr = trees::find_clusters(ring, ra, Domain::periodic_box(L), 0.01);
     REQUIRE(cr.members.size() == 1);
-    const ClusterShape sr = trees::cluster_shapes(cr, ring, ra, periodic_box(L)).at(0);
+    const ClusterShape sr = trees::cluster_shapes(cr, ring, ra, Domain::periodic_box(L)).at(0);
     CHECK(sr.spanning);
     CHECK(std::isnan(sr.radius_of_gyration));
     CHECK(sr.mass == doctest::Approx(10.0));

@@ -29,13 +29,7 @@ using mobility::PairScalars;
 namespace {
 constexpr double pi = 3.14159265358979323846;
 
-Domain box(const Vec3& L, double strain = 0.0) {
-  Domain d;
-  d.kind = Domain::Kind::periodic;
-  d.box = L;
-  d.shear_strain = strain;
-  return d;
-}
+Domain box(const Vec3& L, double strain = 0.0) { return Domain::periodic_box(L, strain); }
 Domain cube(double L, double strain = 0.0) { return box(Vec3(L, L, L), strain); }
 
 double rel_error(const VecX& y, const VecX& ref) { return (y - ref).norm() / ref.norm(); }

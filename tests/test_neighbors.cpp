@@ -35,14 +35,6 @@ Config random_config(int N, const Vec3& L, double a_min, double a_max, std::uint
   return c;
 }
 
-Domain periodic_box(const Vec3& L, double strain) {
-  Domain d;
-  d.kind = Domain::Kind::periodic;
-  d.box = L;
-  d.shear_strain = strain;
-  return d;
-}
-
 // Same (i, j) sequence and bit-identical r; every pair once with i < j; each listed pair really
 // within range and every unlisted pair out of range (the brute force checks the latter).
 void require_same(const std::vector<NeighborPair>& cell, const std::vector<NeighborPair>& ref) {
@@ -66,7 +58,7 @@ TEST_CASE("brute force reference: pair set equals the definition") {
   const Vec3 L(9.0, 10.0, 11.0);
   const Config c = random_config(60, L, 0.5, 1.5, 7, 0.0);
   for (double strain : {0.0, 0.37, -1.3}) {
-    const Domain d = periodic_box(L, strain);
+    const Domain d = Domain::periodic_box(L, strain);
     const double gap = 0.8;
     const auto ref = trees::neighbor_pairs_bruteforce(c.x, c.a, d, gap);
     std::set<std::pair<int, int>> expected;
@@ -106,7 +98,7 @@ TEST_CASE("cell list equals brute force: periodic and Lees-Edwards boxes") {
   const Vec3 L(24.0, 20.0, 18.0);
   for (double strain : {0.0, 0.25, -0.5, 0.8, 3.7}) {
     const Config c = random_config(500, L, 0.2, 2.0, 11, 0.5);
-    const Domain d = periodic_box(L, strain);
+    const Domain d = Domain::periodic_box(L, strain);
     for (double gap : {0.0, 0.05, 1.0, 3.0}) {
       CAPTURE(strain);
       CAPTURE(gap);
@@ -121,7 +113,7 @@ TEST_CASE("polydisperse radius ratio 10 and dense packing") {
   // Cells are sized by the largest pair; small-small and small-large pairs must still all be found.
   const Vec3 L(30.0, 30.0, 30.0);
   Config c = random_config(800, L, 0.3, 3.0, 5, 0.0);
-  const Domain d = periodic_box(L, 0.1);
+  const Domain d = Domain::periodic_box(L, 0.1);
   require_same(trees::neighbor_pairs(c.x, c.a, d, 0.5), trees::neighbor_pairs_bruteforce(c.x, c.a, d, 0.5));
 }
 
@@ -129,15 +121,15 @@ TEST_CASE("small boxes: fewer than 3 cells fall back correctly, too-small boxes 
   // Range R = gap + 2 max a = 0.5 + 2 = 2.5: L = 6 gives 2 cells (fallback), L = 5 is the limit.
   const Config c = random_config(40, Vec3(6, 6, 6), 1.0, 1.0, 3);
   for (double strain : {0.0, 0.4}) {
-    const Domain d = periodic_box(Vec3(6.0, 6.0, 6.0), strain);
+    const Domain d = Domain::periodic_box(Vec3(6.0, 6.0, 6.0), strain);
     require_same(trees::neighbor_pairs(c.x, c.a, d, 0.5), trees::neighbor_pairs_bruteforce(c.x, c.a, d, 0.5));
   }
   // One long direction with enough cells, two short ones: still brute force, still exact.
   const Config c2 = random_config(60, Vec3(40, 6, 6), 1.0, 1.0, 4);
-  const Domain d2 = periodic_box(Vec3(40.0, 6.0, 6.0), 0.2);
+  const Domain d2 = Domain::periodic_box(Vec3(40.0, 6.0, 6.0), 0.2);
   require_same(trees::neighbor_pairs(c2.x, c2.a, d2, 0.5), trees::neighbor_pairs_bruteforce(c2.x, c2.a, d2, 0.5));
   // Exactly at the limit R = L/2 is accepted; beyond it an image of the same pair could be in range.
-  const Domain d3 = periodic_box(Vec3(5.0, 5.0, 5.0), 0.0);
+  const Domain d3 = Domain::periodic_box(Vec3(5.0, 5.0, 5.0), 0.0);
   CHECK_NOTHROW(trees::neighbor_pairs(c.x, c.a, d3, 0.5));
   CHECK_THROWS_AS(trees::neighbor_pairs(c.x, c.a, d3, 0.6), std::invalid_argument);
   CHECK_THROWS_AS(trees::neighbor_pairs_bruteforce(c.x, c.a, d3, 0.6), std::invalid_argument);
@@ -145,11 +137,11 @@ TEST_CASE("small boxes: fewer than 3 cells fall back correctly, too-small boxes 
 
 TEST_CASE("nearest_image_pairs: the cell list where it applies, every pair's nearest image in any box") {
   const Config c = random_config(40, Vec3(6, 6, 6), 1.0, 1.0, 3);
-  const Domain fits = periodic_box(Vec3(6.0, 6.0, 6.0), 0.3);
+  const Domain fits = Domain::periodic_box(Vec3(6.0, 6.0, 6.0), 0.3);
   require_same(trees::nearest_image_pairs(c.x, c.a, fits, 0.5), trees::neighbor_pairs(c.x, c.a, fits, 0.5));
   // Range 3.2 > L/2 = 2.5: the pair list proper is refused; here each pair counts once, by the
   // definition (minimum-image distance below gap + a_i + a_j) written out independently.
-  const Domain small = periodic_box(Vec3(5.0, 5.0, 5.0), 0.3);
+  const Domain small = Domain::periodic_box(Vec3(5.0, 5.0, 5.0), 0.3);
   const auto got = trees::nearest_image_pairs(c.x, c.a, small, 1.2);
   std::size_t expected = 0;
   for (std::size_t i = 0; i < c.x.size(); ++i)

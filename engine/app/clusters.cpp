@@ -59,12 +59,7 @@ int clusters(const std::string& trajectory, const ClusterOptions& opt, std::FILE
     } else {
       for (std::size_t i = n - std::min(n, scene.wall_count); i < n; ++i) skip[i] = 1;
     }
-    Domain d;
-    if (f.periodic) {
-      d.kind = Domain::Kind::periodic;
-      d.box = f.box;
-      d.shear_strain = f.shear_strain;
-    }
+    const Domain d = f.periodic ? Domain::periodic_box(f.box, f.shear_strain) : Domain{};
     // NaN positions (empty slots) must not reach the cell list.
     std::vector<Vec3> x = f.position;
     for (std::size_t i = 0; i < n; ++i)

@@ -20,6 +20,14 @@ struct Domain {
   Vec3 box = Vec3::Zero();
   double shear_strain = 0.0;
   bool periodic() const { return kind == Kind::periodic; }
+  // A periodic box of edges `box` [a] at Lees-Edwards strain `shear_strain`.
+  static Domain periodic_box(const Vec3& box, double shear_strain = 0.0) {
+    Domain d;
+    d.kind = Kind::periodic;
+    d.box = box;
+    d.shear_strain = shear_strain;
+    return d;
+  }
 
   // Minimum-image separation x_i - x_j (identity for open domains): rounds the y image first
   // (shifting x by gamma Ly), then x and z. Exact for |x_i - x_j| < min(Lx, Ly, Lz) / 2.
