@@ -28,7 +28,9 @@
 //
 // Rows: kind 0 calibration (F0, s_c); kind 1 s_c(lambda, gdot*, theta) with the trajectories spent;
 // kind 2 alpha_o and alpha_og per (lambda, gdot*); kind 3 the fitted power law (c, k1, k2).
-// Usage: validate_capture [--quick] [--out DIR] [--force-scale F0]; --quick: the calibration point
+// Usage: validate_capture [--quick] [--out DIR] [--force-scale F0] [--lubrication exact|squeeze]
+// (squeeze: the thesis's own near field, lubrication/squeeze.hpp; results capture_squeeze.json);
+// --quick: the calibration point
 // at 2 % and lambda = 0.5, gdot* = 1, 8 at theta = 0 only. Full: lambda = 0.1, 0.5, 1,
 // gdot* = 1..100, theta = 0, pi/6, pi/3, s_c to 0.2 %.
 #include "bench/harness.hpp"
@@ -56,10 +58,10 @@ struct Critical {
 };
 
 // Bisection on s in [lo, hi] (captured at lo, not at hi) to a relative width `rel`.
-Critical critical_offset(double lambda, double gdot_star, double F0, double theta, double rel) {
+Critical critical_offset(double lambda, double gdot_star, double F0, double theta, double rel, const std::string& lub) {
   Critical c;
   auto captured = [&](double s) {
-    const Trajectory t = run_pair(lambda, gdot_star, F0, s, theta);
+    const Trajectory t = run_pair(lambda, gdot_star, F0, s, theta, lub);
     ++c.trajectories;
     c.undecided += t.outcome == Outcome::undecided;
     return t.outcome == Outcome::captured;
@@ -79,13 +81,20 @@ Critical critical_offset(double lambda, double gdot_star, double F0, double thet
 
 int main(int argc, char** argv) {
   double F0 = 0.0;  // 0: calibrate
+  std::string lub = "exact";
   std::vector<char*> rest{argv[0]};
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--force-scale") == 0 && i + 1 < argc) F0 = std::stod(argv[++i]);
+    else if (std::strcmp(argv[i], "--lubrication") == 0 && i + 1 < argc) lub = argv[++i];
     else rest.push_back(argv[i]);
   }
+  if (lub != "exact" && lub != "squeeze") {
+    std::fprintf(stderr, "validate_capture: --lubrication %s (allowed: exact, squeeze)\n", lub.c_str());
+    return 2;
+  }
   const bench::Options opt = bench::parse_options(int(rest.size()), rest.data());
-  bench::Results res(opt.quick ? "capture_quick" : "capture");
+  const std::string suffix = lub == "exact" ? "" : "_" + lub;
+  bench::Results res(std::string(opt.quick ? "capture_quick" : "capture") + suffix);
   const double rel = opt.quick ? 0.02 : 0.002;
   if (F0 <= 0.0) {
     // Calibration: s_c decreases as F0 grows (shear against a fixed DLVO well); bisection in ln F0.
@@ -94,7 +103,7 @@ int main(int argc, char** argv) {
     const int iters = opt.quick ? 6 : 14;
     for (int k = 0; k < iters; ++k) {
       const double mid = 0.5 * (lo + hi);
-      const Critical c = critical_offset(0.5, 1.0, std::exp(mid), 0.0, rel);
+      const Critical c = critical_offset(0.5, 1.0, std::exp(mid), 0.0, rel, lub);
       std::printf("calibration: F0 = %.6g kT/a  s_c = %.5f  (%ld trajectories)\n", std::exp(mid), c.s_c, c.trajectories);
       std::fflush(stdout);
       res.add({{"kind", 0}, {"F0", std::exp(mid)}}, {{"s_c", c.s_c}, {"trajectories", double(c.trajectories)}});
@@ -113,7 +122,7 @@ int main(int argc, char** argv) {
       std::vector<double> sc;
       for (double th : thetas) {
         Critical c;
-        const double t = bench::time_once([&] { c = critical_offset(lambda, g, F0, th, rel); });
+        const double t = bench::time_once([&] { c = critical_offset(lambda, g, F0, th, rel, lub); });
         sc.push_back(c.s_c);
         std::printf("lambda %.2f gdot* %6.1f theta %.4f: s_c = %.5f (%ld trajectories, %ld undecided, %.1f s)\n", lambda, g,
                     th, c.s_c, c.trajectories, c.undecided, t);

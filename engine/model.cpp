@@ -219,7 +219,11 @@ ResolvedModel resolve_model(const Scene& s) {
                             ", bench_asd/bench_dense_sd; set solver = \"dense\" or \"accelerated\" to choose)");
       else
         m.reasons.push_back("solver set by scene: " + s.hydro.solver);
-    } else if (s.hydro.solver != "auto") {
+    } else if (s.hydro.lubrication != Lubrication::exact) {
+      m.reasons.push_back(std::string("note: lubrication = \"") + name_of(s.hydro.lubrication) +
+                          "\" applies to the stokesian level only; the level here is " + name_of(m.level));
+    }
+    if (m.level != HydroModel::stokesian && s.hydro.solver != "auto") {
       m.reasons.push_back("note: solver = \"" + s.hydro.solver + "\" applies to the stokesian level only; the level here is " +
                           name_of(m.level));
     }
@@ -324,7 +328,13 @@ ResolvedModel resolve_model(const Scene& s) {
         }
       }
       std::ostringstream r;
-      r << "near field: exact two-sphere resistance minus the two-body far field, ";
+      if (np.model == Lubrication::squeeze)
+        r << "near field: the thesis's normal squeeze force (lubrication = \"squeeze\": slip below "
+          << np.squeeze.slip_gap << " a, no slip from " << np.squeeze.transition_gap << " a, evaluated at "
+          << np.squeeze.contact_gap << " a or more; no torque, tangential or stresslet coupling; added to the far field "
+          << "without subtracting its two-body part), ";
+      else
+        r << "near field: exact two-sphere resistance minus the two-body far field, ";
       if (np.taper > 0)
         r << "full for 2r/(a_i+a_j) <= " << np.cutoff - np.taper << ", switched off smoothly to zero at " << np.cutoff;
       else

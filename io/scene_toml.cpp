@@ -1016,7 +1016,8 @@ Scene parse_scene(const toml::table& root, const std::string& source) {
 
   const toml::table& hy = sub(R, root, "hydrodynamics");
   R.only(hy, "hydrodynamics", {"model", "moments", "solver", "far_field", "tolerance", "lubrication_cutoff",
-                                 "lubrication_taper", "lubrication_min_gap"});
+                                 "lubrication_taper", "lubrication_min_gap", "lubrication", "squeeze_contact_gap",
+                                 "squeeze_slip_gap", "squeeze_transition_gap"});
   s.hydro.model = R.name(hy, "hydrodynamics", "model", HydroModel::auto_);
   s.hydro.moments = R.name(hy, "hydrodynamics", "moments", MomentChoice::auto_);
   // A registered method or "auto": checked against the registry by model resolution.
@@ -1048,6 +1049,20 @@ Scene parse_scene(const toml::table& root, const std::string& source) {
     }
   }
   s.hydro.lubrication_min_gap = R.number(hy, "hydrodynamics", "lubrication_min_gap", 1e-6, 1e-8, 0.1);
+  s.hydro.lubrication = R.name(hy, "hydrodynamics", "lubrication", Lubrication::exact);
+  {
+    SqueezeParams& q = s.hydro.squeeze;
+    q.contact_gap = R.number(hy, "hydrodynamics", "squeeze_contact_gap", q.contact_gap, 1e-12, 0.1);
+    q.slip_gap = R.number(hy, "hydrodynamics", "squeeze_slip_gap", q.slip_gap, 1e-10, 1.0);
+    q.transition_gap = R.number(hy, "hydrodynamics", "squeeze_transition_gap", q.transition_gap, 1e-8, 2.0);
+    if (!(q.contact_gap < q.slip_gap && q.slip_gap < q.transition_gap)) {
+      std::ostringstream o;
+      o << "squeeze_contact_gap = " << q.contact_gap << ", squeeze_slip_gap = " << q.slip_gap
+        << ", squeeze_transition_gap = " << q.transition_gap << " are not increasing (allowed: contact < slip < transition)";
+      const char* key = q.contact_gap >= q.slip_gap ? "squeeze_contact_gap" : "squeeze_transition_gap";
+      R.fail(R.get(hy, "hydrodynamics", key), std::string("[hydrodynamics] ") + key, o.str());
+    }
+  }
 
   const toml::table& br = sub(R, root, "brownian");
   R.only(br, "brownian", {"seed", "stress_every"});
@@ -1258,7 +1273,13 @@ std::string resolved_toml(const Scene& s) {
                     {"far_field", s.hydro.far_field},
                     {"solver", s.hydro.solver},
                     {"tolerance", s.hydro.tolerance},
-                    {"lubrication_min_gap", s.hydro.lubrication_min_gap}};
+                    {"lubrication_min_gap", s.hydro.lubrication_min_gap},
+                    {"lubrication", name_of(s.hydro.lubrication)}};
+  if (s.hydro.lubrication == Lubrication::squeeze) {
+    hydro.insert("squeeze_contact_gap", s.hydro.squeeze.contact_gap);
+    hydro.insert("squeeze_slip_gap", s.hydro.squeeze.slip_gap);
+    hydro.insert("squeeze_transition_gap", s.hydro.squeeze.transition_gap);
+  }
   if (s.hydro.lubrication_cutoff_auto) hydro.insert("lubrication_cutoff", "auto");
   else hydro.insert("lubrication_cutoff", s.hydro.lubrication_cutoff);
   if (s.hydro.lubrication_taper_auto) hydro.insert("lubrication_taper", "auto");

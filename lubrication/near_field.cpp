@@ -29,11 +29,16 @@ std::vector<int> level_indices(Moments m) {
 NearField::NearField(Moments m, double mu, NearFieldParams p) : m_(m), mu_(mu), p_(p) {
   if (!(p.cutoff > 2.0) || !(p.taper >= 0.0) || !(p.cutoff - p.taper >= 2.0) || !(p.min_gap > 0.0))
     throw std::invalid_argument("NearField: need cutoff > 2, 0 <= taper <= cutoff - 2, min_gap > 0");
+  const SqueezeParams& q = p.squeeze;
+  if (p.model == Lubrication::squeeze && !(q.contact_gap > 0.0 && q.contact_gap < q.slip_gap && q.slip_gap < q.transition_gap))
+    throw std::invalid_argument("NearField: squeeze gaps need 0 < contact_gap < slip_gap < transition_gap");
 }
 
 NearFieldParams near_field_params(const HydroParams& h, Moments moments, double max_cutoff) {
   NearFieldParams p;
   p.min_gap = h.lubrication_min_gap;
+  p.model = h.lubrication;
+  p.squeeze = h.squeeze;
   if (h.lubrication_cutoff_auto) {
     const CutoffBand b = cutoff_for_tolerance(h.tolerance, moments, max_cutoff);
     p.cutoff = b.s_cut;
@@ -61,6 +66,18 @@ MatX NearField::exact_pair(const Vec3& r_vec, double ai, double aj) const {
 }
 
 MatX NearField::pair_block(const Vec3& r_vec_in, double ai, double aj) const {
+  const int d = dof_per_particle(m_);
+  if (p_.model == Lubrication::squeeze) {
+    const double r = r_vec_in.norm();
+    const Vec3 n = r > 0 ? Vec3(r_vec_in / r) : Vec3::UnitZ();
+    const Mat3 nn = squeeze_coefficient(r - ai - aj, ai, aj, mu_, p_.squeeze) * n * n.transpose();
+    MatX B = MatX::Zero(2 * d, 2 * d);
+    B.block<3, 3>(0, 0) = nn;
+    B.block<3, 3>(d, d) = nn;
+    B.block<3, 3>(0, d) = -nn;
+    B.block<3, 3>(d, 0) = -nn;
+    return B;
+  }
   // Regularised gap: evaluate at xi >= min_gap along the line of centres.
   const double r = r_vec_in.norm(), half = 0.5 * (ai + aj);
   const double xi = r / half - 2.0;
@@ -70,7 +87,6 @@ MatX NearField::pair_block(const Vec3& r_vec_in, double ai, double aj) const {
   // Two-body far-field mobility of the same pair (sphere i at 0, j at r_vec), inverted.
   // Blocks from the closed forms (mobility::fill_pair_block, as the dense assembly uses; the
   // explicit-tensor dense_mobility is the reference it is tested against); (0,1) = (1,0)^T.
-  const int d = dof_per_particle(m_);
   MatX M2(2 * d, 2 * d);
   mobility::fill_pair_block(mobility::self_scalars(ai, mu_), Vec3::UnitZ(), m_, M2.data(), 2 * d);
   mobility::fill_pair_block(mobility::self_scalars(aj, mu_), Vec3::UnitZ(), m_, M2.data() + d * 2 * d + d, 2 * d);
@@ -85,7 +101,8 @@ SparseMatrix NearField::assemble(const std::vector<Vec3>& x, const std::vector<d
                                  NearFieldStats* stats) const {
   const int d = dof_per_particle(m_);
   const double amax = *std::max_element(a.begin(), a.end());
-  tables_.prepare_radii(a);  // exact tables for few distinct size ratios, interpolated in ln(lambda) otherwise
+  // exact tables for few distinct size ratios, interpolated in ln(lambda) otherwise
+  if (p_.model == Lubrication::exact) tables_.prepare_radii(a);
   const auto pairs = trees::neighbor_pairs(x, a, domain, (p_.cutoff - 2.0) * amax);
   // The sparse pattern first (block column j: row blocks j and its partners, ascending), then the
   // pair blocks in parallel: off-diagonal blocks straight into their own places, the two diagonal
@@ -161,7 +178,8 @@ SparseMatrix NearField::assemble(const std::vector<Vec3>& x, const std::vector<d
     const double xi = 2.0 * p.dist / (a[std::size_t(p.i)] + a[std::size_t(p.j)]) - 2.0;
     ++st.pairs;
     st.tapered += wt[m] < 1.0;
-    st.regularised += xi < p_.min_gap;
+    st.regularised += p_.model == Lubrication::exact ? xi < p_.min_gap
+                                                      : p.dist - a[std::size_t(p.i)] - a[std::size_t(p.j)] < p_.squeeze.contact_gap;
     st.overlaps += xi < 0;
     if (xi < st.min_xi) {
       st.min_xi = xi;
@@ -217,7 +235,7 @@ VecX NearField::brownian_force(const std::vector<Vec3>& x, const std::vector<dou
   VecX f = VecX::Zero(n * d);
   if (n < 2) return f;
   const double amax = *std::max_element(a.begin(), a.end());
-  tables_.prepare_radii(a);
+  if (p_.model == Lubrication::exact) tables_.prepare_radii(a);
   // The same pairs, weights and order as assemble().
   const auto pairs = trees::neighbor_pairs(x, a, domain, (p_.cutoff - 2.0) * amax);
   std::vector<std::size_t> in;
@@ -282,7 +300,7 @@ VecX NearField::brownian_force(const std::vector<Vec3>& x, const std::vector<dou
 MatX NearField::assemble_dense(const std::vector<Vec3>& x, const std::vector<double>& a) const {
   const int d = dof_per_particle(m_);
   const long n = long(x.size());
-  tables_.prepare_radii(a);
+  if (p_.model == Lubrication::exact) tables_.prepare_radii(a);
   MatX R = MatX::Zero(n * d, n * d);
   for (long i = 0; i < n; ++i)
     for (long j = i + 1; j < n; ++j) {

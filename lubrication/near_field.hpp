@@ -14,12 +14,16 @@
 // both spheres, so the pair block obeys Newton's third law and the lambda <-> 1/lambda relations).
 // Pairs with xi < xi_min are evaluated at xi_min along their line of centres (regularised
 // minimum gap) and counted; overlaps (xi < 0) are counted separately.
+// With the squeeze level ([hydrodynamics] lubrication = "squeeze"), the pair block is instead the
+// thesis's normal squeeze resistance c(h) [[n n, -n n], [-n n, n n]] on the force rows, with no
+// R2B_inf subtracted (lubrication/squeeze.hpp), under the same switch w(s).
 #include "engine/core/domain.hpp"
 #include "engine/core/scene.hpp"
 #include "engine/core/types.hpp"
 #include "lubrication/cholmod_factor.hpp"
 #include "lubrication/cutoff.hpp"
 #include "lubrication/resistance_table.hpp"
+#include "lubrication/squeeze.hpp"
 
 #include <vector>
 
@@ -29,6 +33,8 @@ struct NearFieldParams {
   double cutoff = kDefaultLubricationCutoff;   // s_cut: pairs with 2 r / (a_i + a_j) < cutoff [1]
   double min_gap = kDefaultLubricationMinGap;  // regularised minimum symmetric gap xi_min [1]
   double taper = 0.0;  // width of the switch band [cutoff - taper, cutoff] [1]; 0 = hard step (published SD)
+  Lubrication model = Lubrication::exact;  // exact two-sphere lubrication or the thesis's squeeze force
+  SqueezeParams squeeze;                   // gaps of the squeeze model [a]
   CutoffBand band() const { return {cutoff - taper, cutoff}; }
 };
 
@@ -58,8 +64,8 @@ class NearField {
   // Reference twin: dense R_nf from an O(N^2) loop over all pairs (open domains).
   MatX assemble_dense(const std::vector<Vec3>& x, const std::vector<double>& a) const;
 
-  // The 2d x 2d pair block R2B_exact - R2B_inf for sphere i at the origin and sphere j at
-  // r_vec = x_j - x_i (pair order i, j), without the switch w(s).
+  // The 2d x 2d pair block R2B_exact - R2B_inf (squeeze level: the squeeze block) for sphere i at the
+  // origin and sphere j at r_vec = x_j - x_i (pair order i, j), without the switch w(s).
   MatX pair_block(const Vec3& r_vec, double ai, double aj) const;
   // The switch w(s) of this near field at symmetric separation s = 2 r / (a_i + a_j).
   double weight(double s) const { return cutoff_weight(s, p_.band()); }

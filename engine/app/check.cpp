@@ -82,6 +82,8 @@ double relative_mobility(const Scene& scene, const ResolvedModel& model, double 
   const double m_far = m_stokes - 2.0 / (4 * kPi * mu * rc) * (1 - (ai * ai + aj * aj) / (3 * rc * rc));
   if (model.level != HydroModel::stokesian) return m_far;
   if (2 * r / (ai + aj) >= lubrication::near_field_params(scene.hydro, model.moments).cutoff) return m_far;
+  if (scene.hydro.lubrication == Lubrication::squeeze)
+    return 1.0 / (1.0 / m_far + lubrication::squeeze_coefficient(h, ai, aj, mu, scene.hydro.squeeze));
   const double h_floor = scene.hydro.lubrication_min_gap * (ai + aj) / 2;
   const double a_eff = ai * aj / (ai + aj);
   return 1.0 / (1.0 / m_far + 6 * kPi * mu * a_eff * a_eff / std::max(h, h_floor));

@@ -166,6 +166,20 @@ struct Names<MomentChoice> {
 // published SD; lubrication::near_field_params() resolves "auto".
 constexpr double kDefaultLubricationCutoff = 4.0, kDefaultLubricationMinGap = 1e-6;
 
+// Near-field level of Stokesian dynamics: exact two-sphere lubrication (lubrication/near_field.hpp)
+// or the thesis's normal squeeze force (lubrication/squeeze.hpp).
+enum class Lubrication { exact, squeeze };
+template <>
+struct Names<Lubrication> {
+  static constexpr NameTable<Lubrication, 2> table{{{Lubrication::exact, "exact"}, {Lubrication::squeeze, "squeeze"}}};
+};
+/// Gaps of the squeeze model [a] (thesis s.5.2.2 defaults in units of the reference radius).
+struct SqueezeParams {
+  double contact_gap = 1e-6;     // d_c,min: smaller surface gaps are evaluated here
+  double slip_gap = 1e-3;        // d_l,slip: the slip form below
+  double transition_gap = 0.25;  // d_l,trans: the no-slip form from here on, a blend in between
+};
+
 struct HydroParams {
   HydroModel model = HydroModel::auto_;
   MomentChoice moments = MomentChoice::auto_;
@@ -182,6 +196,8 @@ struct HydroParams {
   bool lubrication_taper_auto = true;
   double lubrication_taper = 0.0;
   double lubrication_min_gap = kDefaultLubricationMinGap;  // regularised minimum symmetric gap xi = 2r/(a_i+a_j) - 2 [1]
+  Lubrication lubrication = Lubrication::exact;  // near-field level of model = "stokesian"
+  SqueezeParams squeeze;                         // its gaps when lubrication = squeeze
 };
 
 struct TimeParams {

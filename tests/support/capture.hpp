@@ -24,7 +24,8 @@ struct Trajectory {
   long steps = 0;
 };
 
-inline std::string scene_text(double lambda, double rate, double s, double theta) {
+// lubrication: the near-field level, "exact" or the thesis's "squeeze" ([hydrodynamics] lubrication).
+inline std::string scene_text(double lambda, double rate, double s, double theta, const std::string& lubrication = "exact") {
   const double x0 = lambda == 1.0 ? 3.0 : 6.0;
   const double y = s * std::cos(theta), z = s * std::sin(theta);
   std::ostringstream o;
@@ -35,15 +36,16 @@ inline std::string scene_text(double lambda, double rate, double s, double theta
     << "[[forces.pair]]\nkind = \"dlvo\"\nhamaker = 11.569308609513\ndebye_kappa = 100.0\n"
     << "surface_potential = 553.64872421\nborn_sigma = 1.8957508309584e-3\nmin_gap = 2e-4\n"
     << "[[forces.pair]]\nkind = \"hertz\"\nstiffness = 1e4\n"
-    << "[hydrodynamics]\nmodel = \"stokesian\"\nmoments = \"FTS\"\n"
+    << "[hydrodynamics]\nmodel = \"stokesian\"\nmoments = \"FTS\"\nlubrication = \"" << lubrication << "\"\n"
     << "[time]\ndt = " << 0.01 / rate << "\nsteps = 100000000\nintegrator = \"rkf45\"\nrkf_tolerance = 1e-7\n";
   return o.str();
 }
 
-inline Trajectory run_pair(double lambda, double gdot_star, double F0, double s, double theta) {
+inline Trajectory run_pair(double lambda, double gdot_star, double F0, double s, double theta,
+                           const std::string& lubrication = "exact") {
   const double rate = gdot_star * F0 / (6.0 * kPi);
   const double x0 = lambda == 1.0 ? 3.0 : 6.0;
-  Simulation sim(io::parse_scene(scene_text(lambda, rate, s, theta), "capture.toml"));
+  Simulation sim(io::parse_scene(scene_text(lambda, rate, s, theta, lubrication), "capture.toml"));
   State st = sim.initial_state();
   Trajectory tr;
   double held_since = -1.0;  // strain at which the gap fell below kCaptureGap
