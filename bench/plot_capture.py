@@ -7,7 +7,12 @@
   (c) global capture efficiency alpha_og against gdot*, measured (circle through theta = 0, pi/6,
       pi/3) and the thesis's fit 0.33 lambda^0.69 gdot*^-0.36 (dashed), with our own power-law fit.
 
-Prints markdown tables for docs/capture.md. usage: plot_capture.py [RESULTS.json] [OUT.png]
+With a second results file (e.g. capture_squeeze.json, the thesis's squeeze lubrication), panels (b)
+and (c) also draw its critical offsets and efficiencies (open markers, thin lines), and a table
+compares the two.
+
+Prints markdown tables for docs/capture.md.
+usage: plot_capture.py [RESULTS.json] [OUT.png] [OTHER.json]
 (defaults bench/results/capture.json, OUT = RESULTS with .png). Debian's python3-numpy/matplotlib only.
 """
 import json
@@ -22,6 +27,10 @@ src = sys.argv[1] if len(sys.argv) > 1 else "bench/results/capture.json"
 out = sys.argv[2] if len(sys.argv) > 2 else src.replace(".json", ".png")
 rows = json.load(open(src))["rows"]
 kind = lambda k: [r for r in rows if r["params"]["kind"] == k]
+other = json.load(open(sys.argv[3])) if len(sys.argv) > 3 else None
+other_rows = other["rows"] if other else []
+other_name = other["benchmark"].replace("capture_", "").replace("quick_", "") if other else ""
+okind = lambda k: [r for r in other_rows if r["params"]["kind"] == k]
 
 fig, axs = plt.subplots(1, 3, figsize=(16, 4.8))
 cal = sorted(kind(0), key=lambda r: r["params"]["F0"])
@@ -54,6 +63,15 @@ for i, lam in enumerate(lams):
         vals = [next((r["phases"]["s_c"] for r in sc if r["params"]["lambda"] == lam and r["params"]["gdot"] == g
                       and r["params"]["theta"] == th), float("nan")) for th in ths]
         print(f"| {lam:g} | {g:g} | " + " | ".join(f"{v:.4f}" for v in vals) + " |")
+for i, lam in enumerate(lams):
+    for j, th in enumerate(ths):
+        pts = sorted((r["params"]["gdot"], r["phases"]["s_c"]) for r in okind(1)
+                     if r["params"]["lambda"] == lam and r["params"]["theta"] == th)
+        if pts:
+            axs[1].semilogx([p[0] for p in pts], [p[1] for p in pts], marks[j % 5] + "-", color=f"C{i}", mfc="none",
+                            lw=0.6, alpha=0.8)
+if other:
+    axs[1].plot([], [], "ko", mfc="none", lw=0.6, label=f"open: {other_name}")
 axs[1].set_xlabel(r"$\dot\gamma^* = \dot\gamma L_0/U_0$")
 axs[1].set_ylabel(r"critical offset $s_c$ [$L_0$]")
 axs[1].set_title(r"(b) critical offset (per-sphere, $\theta$ from the y axis)", fontsize=10)
@@ -79,9 +97,29 @@ if fit:
     print(f"\nfit: alpha_og = {c:.4f} lambda^{k1:.3f} gdot*^{k2:.3f} (thesis 0.33 lambda^0.69 gdot*^-0.36)")
     axs[2].plot([], [], "k:", label=rf"our fit {c:.3f} $\lambda^{{{k1:.2f}}}\dot\gamma^{{*{k2:.2f}}}$")
 axs[2].plot([], [], "k--", label=r"thesis 0.33 $\lambda^{0.69}\dot\gamma^{*-0.36}$")
+if other:
+    oeff = okind(2)
+    print(f"\n{other_name} against this run: alpha_og\n\n| lambda | gdot* | this run | {other_name} | ratio | thesis fit |"
+          "\n|---|---|---|---|---|---|")
+    all_lams = sorted({r["params"]["lambda"] for r in eff})
+    for lam in sorted({r["params"]["lambda"] for r in oeff}):
+        i = all_lams.index(lam) if lam in all_lams else len(all_lams)
+        pts = sorted((r["params"]["gdot"], r["phases"]["alpha_og"]) for r in oeff if r["params"]["lambda"] == lam)
+        axs[2].loglog([p[0] for p in pts], [p[1] for p in pts], "s-", color=f"C{i}", mfc="none", lw=0.6)
+        for g, a in pts:
+            mine = next((r["phases"]["alpha_og"] for r in eff if r["params"]["lambda"] == lam and r["params"]["gdot"] == g),
+                        float("nan"))
+            print(f"| {lam:g} | {g:g} | {mine:.4f} | {a:.4f} | {a / mine:.3f} | {0.33 * lam ** 0.69 * g ** -0.36:.4f} |")
+    axs[2].plot([], [], "ks-", mfc="none", lw=0.6, label=f"{other_name}")
+    for r in okind(0)[-1:]:
+        print(f"\n{other_name}: last calibration step F0 = {r['params']['F0']:.5g}, s_c = {r['phases']['s_c']:.5f}")
+    for r in okind(3):
+        print(f"{other_name} fit: alpha_og = {r['phases']['c']:.4f} lambda^{r['phases']['k1']:.3f} "
+              f"gdot*^{r['phases']['k2']:.3f}")
 axs[2].set_xlabel(r"$\dot\gamma^*$")
 axs[2].set_ylabel(r"global capture efficiency $\alpha_{o,g}$")
-axs[2].set_title("(c) capture efficiency: exact hydrodynamics vs the thesis's fit", fontsize=10)
+axs[2].set_title("(c) capture efficiency against the thesis's fit" + (f" (open: {other_name})" if other else ""),
+                 fontsize=10)
 axs[2].legend(fontsize=7)
 axs[2].grid(alpha=0.3, which="both")
 fig.tight_layout()

@@ -11,7 +11,8 @@
 // 0.052) and stays below 1.5 h_cap over a further shear strain of 10 (a doublet orbiting in the
 // minimum). Escape: sphere 2 has passed sphere 1 by 4 x0 along x with the gap above h_cap, or the
 // strain exceeds 400 ("undecided", counted as escape and reported).
-// Critical offset s_c(lambda, gdot, theta): bisection on s between a captured and an escaped start.
+// Critical offset s_c(lambda, gdot, theta): bisection on s between a captured and an escaped start;
+// s_c = 0 when no start down to s = 0.019 is captured.
 // Capture efficiency ([T] eq. 5.11 in per-sphere offsets s): for a boundary s_c(theta) of the
 // quarter cross-section, alpha_o = 3/(1+lambda)^3 int y Z(y) dy = 1/(1+lambda)^3 int_0^{pi/2}
 // cos(theta) s_c(theta)^3 d(theta); the thesis's circle through theta = 0, pi/6, pi/3 gives
@@ -29,7 +30,8 @@
 // Rows: kind 0 calibration (F0, s_c); kind 1 s_c(lambda, gdot*, theta) with the trajectories spent;
 // kind 2 alpha_o and alpha_og per (lambda, gdot*); kind 3 the fitted power law (c, k1, k2).
 // Usage: validate_capture [--quick] [--out DIR] [--force-scale F0] [--lubrication exact|squeeze]
-// (squeeze: the thesis's own near field, lubrication/squeeze.hpp; results capture_squeeze.json);
+// [--scan LAMBDA,GDOT,THETA] (squeeze: the thesis's own near field, lubrication/squeeze.hpp;
+// results capture_squeeze.json; --scan: the outcome of each start s = 0.02 ... 1.6, no bisection);
 // --quick: the calibration point
 // at 2 % and lambda = 0.5, gdot* = 1, 8 at theta = 0 only. Full: lambda = 0.1, 0.5, 1,
 // gdot* = 1..100, theta = 0, pi/6, pi/3, s_c to 0.2 %.
@@ -67,7 +69,9 @@ Critical critical_offset(double lambda, double gdot_star, double F0, double thet
     return t.outcome == Outcome::captured;
   };
   double lo = 0.3, hi = 2.5;
-  while (!captured(lo) && lo > 0.02) lo *= 0.5;
+  bool any = captured(lo);
+  while (!any && lo > 0.02) any = captured(lo *= 0.5);
+  if (!any) return c;  // no capture down to s = 0.019: s_c = 0
   while (captured(hi) && hi < 8.0) hi *= 1.5;
   while (hi - lo > rel * lo) {
     const double mid = 0.5 * (lo + hi);
@@ -86,6 +90,22 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--force-scale") == 0 && i + 1 < argc) F0 = std::stod(argv[++i]);
     else if (std::strcmp(argv[i], "--lubrication") == 0 && i + 1 < argc) lub = argv[++i];
+    else if (std::strcmp(argv[i], "--scan") == 0 && i + 1 < argc) {
+      // --scan lambda,gdot*,theta: the outcome of every start s = 0.02, 0.04, ... 1.6 (needs --force-scale).
+      double lam = 0, g = 0, th = 0;
+      if (std::sscanf(argv[++i], "%lf,%lf,%lf", &lam, &g, &th) != 3 || F0 <= 0.0) {
+        std::fprintf(stderr, "validate_capture: --scan needs --force-scale F0 first and LAMBDA,GDOT,THETA\n");
+        return 2;
+      }
+      for (int k = 1; k <= 80; ++k) {
+        const Trajectory t = run_pair(lam, g, F0, 0.02 * k, th, lub);
+        const char* o = t.outcome == Outcome::captured ? "captured" : t.outcome == Outcome::escaped ? "escaped" : "undecided";
+        std::printf("s %.2f %-9s strain %7.2f gap %.4f smallest gap %.5f steps %ld\n", 0.02 * k, o, t.strain, t.gap,
+                    t.min_gap, t.steps);
+        std::fflush(stdout);
+      }
+      return 0;
+    }
     else rest.push_back(argv[i]);
   }
   if (lub != "exact" && lub != "squeeze") {

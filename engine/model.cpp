@@ -345,9 +345,11 @@ ResolvedModel resolve_model(const Scene& s) {
         if (s.hydro.tolerance < floor)
           r << "; the cutoff is capped, so the two-sphere error is bounded by " << floor << ", not the tolerance";
         r << ")";
-      } else if (np.taper == 0) {
+      } else if (np.taper == 0 && np.model == Lubrication::exact) {
         r << ", published SD: the two-sphere mobility jumps there by up to "
           << (m.moments == Moments::FTS ? "2.3e-3" : "2.3e-2") << "; lubrication_cutoff = \"auto\" makes it continuous)";
+      } else if (np.taper == 0) {
+        r << ": the squeeze force jumps to zero there; a lubrication_taper switches it off smoothly)";
       }
       m.reasons.push_back(r.str());
     }

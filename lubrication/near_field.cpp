@@ -1,6 +1,7 @@
 #include "lubrication/near_field.hpp"
 
 #include "engine/core/parallel.hpp"
+#include "engine/core/sym_traceless.hpp"
 
 #include "engine/kernels/far_field.hpp"
 #include "engine/kernels/mobility_pair.hpp"
@@ -68,15 +69,22 @@ MatX NearField::exact_pair(const Vec3& r_vec, double ai, double aj) const {
 MatX NearField::pair_block(const Vec3& r_vec_in, double ai, double aj) const {
   const int d = dof_per_particle(m_);
   if (p_.model == Lubrication::squeeze) {
+    // c g g^T with w = g.v the normal velocity of j relative to i (squeeze.hpp): in the generalised
+    // velocities v = [U_i - U_inf(x_i), Omega_i, e_i, U_j - U_inf(x_j), Omega_j, e_j] (e = -E_inf
+    // coordinates, the same in both e columns) w = n.(U_j - U_i) = n.(v_Uj - v_Ui) + r n.E_inf.n, and
+    // r n.E_inf.n = -(r/2) q.(e_i + e_j) with q the coordinates of n n (engine/core/sym_traceless.hpp).
+    // F and FT have no e columns: there the ambient strain does not enter (as for exact lubrication).
     const double r = r_vec_in.norm();
     const Vec3 n = r > 0 ? Vec3(r_vec_in / r) : Vec3::UnitZ();
-    const Mat3 nn = squeeze_coefficient(r - ai - aj, ai, aj, mu_, p_.squeeze) * n * n.transpose();
-    MatX B = MatX::Zero(2 * d, 2 * d);
-    B.block<3, 3>(0, 0) = nn;
-    B.block<3, 3>(d, d) = nn;
-    B.block<3, 3>(0, d) = -nn;
-    B.block<3, 3>(d, 0) = -nn;
-    return B;
+    VecX g = VecX::Zero(2 * d);
+    g.segment<3>(0) = -n;
+    g.segment<3>(d) = n;
+    if (m_ == Moments::FTS) {
+      const Vec5 q = to_vec5(n * n.transpose());
+      g.segment<5>(6) = -0.5 * r * q;
+      g.segment<5>(d + 6) = -0.5 * r * q;
+    }
+    return squeeze_coefficient(r - ai - aj, ai, aj, mu_, p_.squeeze) * g * g.transpose();
   }
   // Regularised gap: evaluate at xi >= min_gap along the line of centres.
   const double r = r_vec_in.norm(), half = 0.5 * (ai + aj);

@@ -5,11 +5,14 @@
 //
 //     F_i = c(h) ((U_j - U_i) . n) n,    F_j = -F_i,
 //
-// no torque, no tangential force, no stresslet. In resistance form this is the block
-// c(h) [[n n, -n n], [-n n, n n]] on the pair's force rows, added to M_inf^{-1} as it stands: the
-// thesis neither subtracts the far field's own two-body part nor states an outer cutoff (ours is the
-// near field's, [hydrodynamics] lubrication_cutoff). With the reduced radius a_r = a_i a_j/(a_i + a_j)
-// (5.6), slip gap d_s and transition gap d_t:
+// no torque and no tangential force. U are the particles' own velocities, not relative to the
+// ambient flow. In resistance form this is the rank-one block c(h) g g^T, g.v = n.(U_j - U_i) in the
+// solvers' generalised velocities v (at FTS the strain columns carry the ambient part r n.E_inf.n
+// and the stresslet rows the pair's force dipole; F and FT have no strain columns, so there, as for
+// exact lubrication, the ambient strain does not enter; lubrication/near_field.cpp). It is added to
+// M_inf^{-1} as it stands: the thesis neither subtracts the far field's own two-body part nor states
+// an outer cutoff (ours is the near field's, [hydrodynamics] lubrication_cutoff). With the reduced
+// radius a_r = a_i a_j/(a_i + a_j) (5.6), slip gap d_s and transition gap d_t:
 //
 //   no slip (5.5), h >= d_t:
 //     c_ns = k1 6 pi mu a_r^2 (1/h - 1/(h + 2 a_r)),  k1 = 1.041 - 0.281 L - 0.0351 L^2,

@@ -6,12 +6,14 @@
 #include <doctest/doctest.h>
 
 #include "engine/core/errors.hpp"
+#include "engine/core/sym_traceless.hpp"
 #include "io/scene_toml.hpp"
 #include "lubrication/near_field.hpp"
 #include "lubrication/resistance_functions.hpp"
 #include "lubrication/squeeze.hpp"
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/LU>
 
 #include <cmath>
 #include <string>
@@ -118,8 +120,10 @@ TEST_CASE("squeeze: the pair block is a normal force on the force rows, symmetri
     CHECK(n.dot(B.block<3, 3>(0, d) * n) == doctest::Approx(-c));
     CHECK((B.block<3, 3>(0, 0) - c * n * n.transpose()).norm() < 1e-12 * c);
     for (int k = 0; k < 2 * d; ++k)
-      if (k % d >= 3) CHECK(B.row(k).norm() == 0.0);  // no torque or stresslet coupling
+      if (k % d >= 3 && k % d < 6) CHECK(B.row(k).norm() == 0.0);  // no torque coupling
     CHECK((B.block(0, 0, 3, 2 * d) + B.block(d, 0, 3, 2 * d)).norm() < 1e-12 * c);  // F_i = -F_j
+    // Rank one: the dissipation c w^2 of the normal relative velocity w alone.
+    CHECK(Eigen::FullPivLU<MatX>(B).setThreshold(1e-10).rank() == 1);
     const Eigen::SelfAdjointEigenSolver<MatX> es(B);
     CHECK(es.eigenvalues().minCoeff() > -1e-12 * c);
   }
@@ -131,6 +135,49 @@ TEST_CASE("squeeze: the pair block is a normal force on the force rows, symmetri
   const MatX sparse = MatX(nf.assemble(x, a, Domain{}));
   CHECK((dense - sparse).norm() < 1e-12 * dense.norm());
   CHECK(dense.block(18, 0, 6, 24).norm() == 0.0);
+}
+
+TEST_CASE("squeeze: the force follows the particles' own relative velocity, also in an ambient strain") {
+  // The squeeze force of the thesis acts on n.(U_j - U_i) in absolute velocities. The FTS block
+  // therefore couples the force rows to the strain columns: for particles moving with a pure strain
+  // flow E (v_U = 0, e = -E coordinates in both e columns) the force vanishes only if c is applied
+  // to n.(U_j - U_i) = r n.E.n. Reference for the sign and size: the exact two-sphere resistance,
+  // whose singular part has the same structure, -n.R_FiE / (-n.R_FiUj.n) -> r q as h -> 0 (q the
+  // coordinates of n n; the two e columns summed, since they always carry the same strain).
+  NearFieldParams np;
+  np.model = Lubrication::squeeze;
+  const NearField nf(Moments::FTS, 1.0, np);
+  for (double lambda : {1.0, 0.5, 0.2}) {
+    const Vec3 n = Vec3(0.3, 0.8, -0.52).normalized();
+    const double h = 1e-4, r = 1.0 + lambda + h;
+    const Vec5 q = to_vec5(n * n.transpose());
+    const MatX B = nf.pair_block(r * n, 1.0, lambda);
+    const PairMatrix R = two_sphere_resistance(r * n, 1.0, lambda, 1.0);
+    Vec5 sq, ex;
+    for (int k = 0; k < 5; ++k) {
+      sq[k] = n.dot(B.block<3, 1>(0, 6 + k) + B.block<3, 1>(0, 17 + k));
+      ex[k] = n.dot(R.block<3, 1>(0, 6 + k) + R.block<3, 1>(0, 17 + k));
+    }
+    const double csq = -n.dot(B.block<3, 3>(0, 11) * n), cex = -n.dot(R.block<3, 3>(0, 11) * n);
+    CAPTURE(lambda);
+    CHECK((sq / csq - r * q).norm() < 1e-12 * r);
+    CHECK((ex / cex - r * q).norm() < 2e-3 * r);  // the exact pair, O(h ln h) from its leading term
+  }
+  // Two spheres carried by a planar extension with no force: w = 0 in absolute velocities means
+  // the squeeze force is zero; the strain columns then cancel the ambient relative velocity.
+  const Vec3 rv(2.05, 0.0, 0.0);
+  const MatX B = nf.pair_block(rv, 1.0, 1.0);
+  VecX v = VecX::Zero(22);
+  Mat3 E = Mat3::Zero();
+  E(0, 0) = 0.5;
+  E(1, 1) = -0.5;
+  v.segment<5>(6) = -to_vec5(E);
+  v.segment<5>(17) = -to_vec5(E);
+  // Particles moving with the flow: U - U_inf = 0; the pair is pulled apart at r n.E.n = 1.025.
+  const VecX F = B * v;  // force on the fluid: -c w n on particle 0 with w = 1.025
+  const double c = squeeze_coefficient(0.05, 1.0, 1.0, 1.0, np.squeeze);
+  CHECK(F[0] == doctest::Approx(-c * 1.025));
+  CHECK(F[11] == doctest::Approx(c * 1.025));
 }
 
 TEST_CASE("squeeze: scene keys, the recorded choice and bad input") {

@@ -5,6 +5,7 @@
 #include "engine/simulation.hpp"
 #include "io/scene_toml.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <string>
@@ -21,6 +22,7 @@ struct Trajectory {
   Outcome outcome = Outcome::undecided;
   double strain = 0.0;  // shear strain at the decision
   double gap = 0.0;     // surface gap then
+  double min_gap = 1e300;  // smallest surface gap on the way
   long steps = 0;
 };
 
@@ -55,6 +57,7 @@ inline Trajectory run_pair(double lambda, double gdot_star, double F0, double s,
     ++tr.steps;
     const Vec3 d = st.position[1] - st.position[0];
     tr.gap = d.norm() - 1.0 - lambda;
+    tr.min_gap = std::min(tr.min_gap, tr.gap);
     tr.strain = rate * st.time;
     if (held_since >= 0.0) {
       if (tr.gap > 1.5 * kCaptureGap) {
