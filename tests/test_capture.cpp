@@ -26,3 +26,16 @@ TEST_CASE("DLVO capture in shear: captured near the axis at the secondary minimu
   CHECK(eq.outcome == Outcome::captured);
   CHECK(eq.gap + 2.0 == doctest::Approx(2.051).epsilon(2e-3));
 }
+
+TEST_CASE("DLVO capture in shear with the thesis's squeeze lubrication: head-on pairs are held at high shear too") {
+  // The squeeze force acts on the particles' own relative velocity; were it applied to the velocity
+  // relative to the ambient flow, the straining flow would pull every doublet out of the well at
+  // gdot* = 64 (lubrication/squeeze.hpp). F0 = 0.667 kT/a, the squeeze model's calibration.
+  const auto head_on = run_pair(1.0, 64.0, 0.667, 0.3, 0.0, "squeeze");
+  CHECK(head_on.outcome == Outcome::captured);
+  CHECK(head_on.gap + 2.0 == doctest::Approx(2.051).epsilon(2e-3));
+  CHECK(run_pair(1.0, 64.0, 0.667, 1.2, 0.0, "squeeze").outcome == Outcome::escaped);
+  const auto small = run_pair(0.5, 8.0, 0.667, 0.5, 0.0, "squeeze");
+  CHECK(small.outcome == Outcome::captured);
+  CHECK(small.gap + 1.5 == doctest::Approx(1.552).epsilon(2e-3));
+}
