@@ -85,7 +85,7 @@ for i, lam in enumerate(sorted({r["params"]["lambda"] for r in eff})):
     pts = sorted((r["params"]["gdot"], r["phases"]["alpha_og"], r["phases"]["thesis_fit"], r["phases"]["R"],
                   r["phases"]["alpha_o"]) for r in eff if r["params"]["lambda"] == lam)
     g = np.array([p[0] for p in pts])
-    axs[2].loglog(g, [p[1] for p in pts], "o-", color=f"C{i}", label=rf"measured, $\lambda$ = {lam:g}")
+    axs[2].loglog(g, [p[1] for p in pts], "o-", color=f"C{i}", label=(rf"exact, $\lambda$ = {lam:g}" if other else rf"measured, $\lambda$ = {lam:g}"))
     axs[2].loglog(g, [p[2] for p in pts], "--", color=f"C{i}", alpha=0.7)
     if fit:
         c, k1, k2 = (fit[0]["phases"][k] for k in ("c", "k1", "k2"))
