@@ -97,7 +97,7 @@ class Reader {
     const toml::node* n = get(t, table, key);
     if (!n) return def;
     auto s = n->value_exact<std::string>();
-    if (!s) fail(n, where(table, key), "expected a string, got " + type_name(*n));
+    if (!s) fail(n, where(table, key), "expected a string, got " + type_name(*n) + " (allowed: " + quoted_list(allowed) + ")");
     check_length(n, where(table, key), *s);
     if (std::find(allowed.begin(), allowed.end(), *s) == allowed.end())
       fail(n, where(table, key), "\"" + *s + "\" is not one of " + quoted_list(allowed));

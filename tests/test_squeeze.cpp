@@ -205,6 +205,8 @@ TEST_CASE("squeeze: scene keys, the recorded choice and bad input") {
   CHECK(e.find("sq.toml") != std::string::npos);
   CHECK(e.find("squeeze_contact_gap") != std::string::npos);
   CHECK(e.find("contact < slip < transition") != std::string::npos);
+  e = error_of("lubrication = 1\n");  // a wrong type names the allowed values too
+  CHECK(e.find("\"exact\", \"squeeze\"") != std::string::npos);
   e = error_of("squeeze_transition_gap = -1\n");
   CHECK(e.find("squeeze_transition_gap") != std::string::npos);
 }

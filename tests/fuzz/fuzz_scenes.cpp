@@ -717,7 +717,7 @@ struct Generator {
         {"fluid", {"viscosty", "kt", "temperature"}},
         {"forces", {"external_forces", "gravty"}},
         {"flow", {"rates", "type"}},
-        {"hydrodynamics", {"models", "moment", "lubrication"}},
+        {"hydrodynamics", {"models", "moment", "lubrication_cutof"}},
         {"brownian", {"sed", "kT"}},
         {"time", {"Dt", "step", "integrater"}},
         {"output", {"records", "every_", "checkpoint"}},
