@@ -3,10 +3,12 @@
 
     python3 tools/stokesian_cloud_plot.py RUN.h5 [--out RUN_cloud.png] [--snapshots 6]
 
-Top row: side views (x horizontal, z vertical) of every sphere at evenly spaced frames, centred on
-the cloud's centroid (`cloud_centroid`), spheres outside the cloud (`cloud_link` groups below
-`cloud_min_fraction`) grey. Middle row: the same frames cut through the centroid, the slab
-|y - c_y| < R0/4 (R0 the first frame's `cloud_radius`): a torus shows as two lobes. Bottom row:
+Top row: side views (x horizontal, z vertical) of every sphere within 3 R0 of the cloud's centroid
+(`cloud_centroid`) at evenly spaced frames, centred on it. Second row: the same frames cut through
+the centroid, the slab
+|y - c_y| < R0/4 (R0 the first frame's `cloud_radius`): a torus shows as two lobes. Third row: the
+same frames from above (x, y), without the tail above the cloud (z - c_z > R0): the ring of a
+torus, and the lobes into which it breaks up. Bottom row:
 `cloud_axis_fraction` (0.092 for a uniform sphere, dotted), the lost fraction `cloud_lost`/N,
 `cloud_parts`, and the eigenvalues of `cloud_gyration` over R0^2/5, against the distance fallen in
 initial cloud radii. Needs numpy, matplotlib and h5py (Debian: python3-numpy python3-matplotlib
@@ -44,8 +46,8 @@ def main():
         R0 = ob["cloud_radius"][1][0]
         c0 = ob["cloud_centroid"][1][0]
         frames = np.unique(np.linspace(0, len(t) - 1, a.snapshots).round().astype(int))
-        fig = plt.figure(figsize=(3.0 * len(frames), 9.6))
-        gs = fig.add_gridspec(3, len(frames), height_ratios=[1.15, 1.15, 1.0])
+        fig = plt.figure(figsize=(3.0 * len(frames), 12.6))
+        gs = fig.add_gridspec(4, len(frames), height_ratios=[1.15, 1.15, 1.15, 1.0])
         link_groups = None
         for col, k in enumerate(frames):
             p = x[k]
@@ -67,6 +69,16 @@ def main():
                     ax.set_ylabel(("all spheres" if row == 0 else r"slab $|y - c_y| < R_0/4$") + "\n$(z - c_z)/R_0$",
                                   fontsize=8)
                 ax.set_xlabel(r"$(x - c_x)/R_0$", fontsize=8)
+            ax = fig.add_subplot(gs[2, col])
+            sel = ~far & (d[:, 2] < R0)
+            ax.scatter(d[sel, 0] / R0, d[sel, 1] / R0, s=1.0, c="C0", lw=0)
+            ax.set_xlim(-2.5, 2.5)
+            ax.set_ylim(-2.5, 2.5)
+            ax.set_aspect("equal")
+            ax.tick_params(labelsize=7)
+            if col == 0:
+                ax.set_ylabel("from above\n$(y - c_y)/R_0$", fontsize=8)
+            ax.set_xlabel(r"$(x - c_x)/R_0$", fontsize=8)
         tc, cz = ob["cloud_centroid"][0], ob["cloud_centroid"][1][:, 2]
         fallen = (c0[2] - cz) / R0
 
@@ -76,7 +88,7 @@ def main():
 
         ncols = len(frames)
         span = max(1, ncols // 4)
-        axes = [fig.add_subplot(gs[2, i * span:(i + 1) * span if i < 3 else ncols]) for i in range(4)]
+        axes = [fig.add_subplot(gs[3, i * span:(i + 1) * span if i < 3 else ncols]) for i in range(4)]
         xs, v = at("cloud_axis_fraction")
         axes[0].plot(xs, v, "C0-")
         axes[0].axhline(1 - (15 / 16) ** 1.5, color="k", ls=":", lw=0.8)
