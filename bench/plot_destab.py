@@ -5,7 +5,7 @@
                                           [--stokesian build/stokesian] [--gap 0.1] [--check]
 
 Each DIR is a folder of `stokesian sweep` over configs/sweeps/destabilisation*.toml. For every
-finished run (run_XXXX/status says done) the script reads the resolved scene (box, body forces),
+run its summary.csv marks done, the script reads the resolved scene (box, body forces),
 the radii (N and the volume fraction) and the cluster analysis `trajectory.clusters.h5`, which it
 makes with `stokesian clusters trajectory.h5 --gap GAP` when it is missing, has another bond gap or
 leaves frames out.
@@ -33,7 +33,7 @@ The JSON holds the runs' series, the group means and the checks the thesis state
 --check exits 1 unless all hold.
 """
 import argparse
-import glob
+import csv
 import json
 import math
 import os
@@ -74,12 +74,14 @@ def clusters_file(traj):
 
 runs = []
 for d in args.dirs:
-    for rd in sorted(glob.glob(os.path.join(d, "run_*"))):
-        st = os.path.join(rd, "status")
-        if not os.path.exists(st) or "status = done" not in open(st).read():
-            print(f"{rd}: not finished, left out", file=sys.stderr)
+    table = os.path.join(d, "summary.csv")  # the sweep's own record of each run (docs/sweeps.md)
+    if not os.path.exists(table):
+        sys.exit(f"plot_destab: {table} missing: {d} is not a folder of a `stokesian sweep`")
+    for row in csv.DictReader(open(table)):
+        rd = os.path.join(d, row["run"])
+        if row["status"] != "done":
+            print(f"{rd}: {row['status']}, left out", file=sys.stderr)
             continue
-        status = dict(line.split(" = ", 1) for line in open(st).read().splitlines() if " = " in line)
         scene = tomllib.load(open(os.path.join(rd, "scene.toml"), "rb"))  # resolved: radii and forces listed
         traj = os.path.join(rd, "trajectory.h5")
         L = scene["domain"]["box"]
@@ -104,7 +106,7 @@ for d in args.dirs:
         runs.append(dict(
             dir=rd, model=model, N=N, box=float(L[0]), phi_actual=phi_actual, x0_sum=float(np.abs(x0).sum()),
             F0=float(math.sqrt(sum(x * x for x in f0)) / a[0] ** 3), git=git,
-            wall_seconds=float(status.get("wall_seconds", "nan")), steps=steps,
+            wall_seconds=float(row["wall_seconds"]), steps=steps,
             t=t.tolist(), nc=(nc / N).tolist(), n2=(cls[0] / N).tolist(), n3=(cls[1] / N).tolist(),
             n4=(cls[2] / N).tolist(), largest=largest.tolist()))
 if not runs:
