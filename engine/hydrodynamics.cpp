@@ -13,7 +13,8 @@ Hydrodynamics::Hydrodynamics(const ResolvedModel& model, double viscosity, std::
   if (!solver) throw std::invalid_argument("Hydrodynamics: no solver \"" + solver_of(model_) + "\"");
   SolverSetup setup;
   setup.knobs = derive_knobs(tolerance, model_.level, radius_ratio);
-  setup.spec = MobilitySpec{model_.moments, viscosity, setup.knobs.far_field};
+  setup.spec = MobilitySpec{model_.moments, viscosity, setup.knobs.far_field,
+                            far_field_products_per_configuration(model_)};
   setup.near_field = near_field;
   if (solver->needs_far_field) {
     const FarFieldMethodEntry* ff = far_field_methods().find(model_.far_field);

@@ -108,6 +108,13 @@ std::string solver_of(const ResolvedModel& m) {
   return "";
 }
 
+double far_field_products_per_configuration(const ResolvedModel& m) {
+  if (m.level == HydroModel::free_draining) return 0.0;
+  const bool given_velocities = m.moments == Moments::FTS || m.fixed_particles;
+  const double solve = solver_of(m) == "mobility_cg" && !given_velocities ? 1.0 : 20.0;
+  return solve + (m.brownian ? 15.0 : 0.0);
+}
+
 std::string ResolvedModel::describe() const {
   std::ostringstream o;
   o << "hydrodynamics: " << name_of(level) << "\nsolver: " << solver_of(*this) << "\nmoments: " << name_of(moments);

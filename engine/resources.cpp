@@ -150,8 +150,10 @@ ResourceEstimate estimate_resources(const Scene& s, const ResolvedModel& model) 
       try {
         const ewald::Lattice lattice = ewald::Lattice::from_domain(s.domain);
         const double ff_tol = derive_knobs(s.hydro.tolerance, model.level, a_max / a_min).far_field;  // as the run asks
+        ewald::PmeOptions po;  // as the run's operator chooses them (engine/hydrodynamics.cpp)
+        po.products_per_update = far_field_products_per_configuration(model);
         const ewald::PmeParameters p =
-            ewald::pme_parameters(ff_tol, lattice, int(std::min(N, 2e9)), a_min, a_max, model.moments);
+            ewald::pme_parameters(ff_tol, lattice, int(std::min(N, 2e9)), a_min, a_max, model.moments, po);
         const double G = double(p.grid[0]) * p.grid[1] * ((p.grid[2] + p.support + 3) / 4 * 4);  // padded rows
         const double spectral = double(p.grid[0]) * p.grid[1] * (p.grid[2] / 2 + 1);
         Keys gk = model_keys;
@@ -174,7 +176,7 @@ ResourceEstimate estimate_resources(const Scene& s, const ResolvedModel& model) 
                                 "support P = " + num(P) + ", " + num(pairs) + " real-space pairs within cut-off gap " +
                                     num(p.cutoff_gap) + " a",
                                 gk});
-        product = p.est_cost;  // the PME cost model (ewald/pme_parameters.hpp), one thread
+        product = p.est_cost;  // the PME cost model (ewald/pme_parameters.hpp), one thread, set-up shared
       } catch (const std::invalid_argument&) {
         // The box is too small for the minimum-image real-space sum: the operator reports it.
       }

@@ -35,7 +35,9 @@ struct PmeFarField::Fft {
 };
 
 PmeFarField::PmeFarField(const MobilitySpec& spec, const PmeOptions& opt)
-    : n_(0), mu_(spec.viscosity), m_(spec.moments), tolerance_(spec.tolerance), options_(opt) {}
+    : n_(0), mu_(spec.viscosity), m_(spec.moments), tolerance_(spec.tolerance), options_(opt) {
+  if (options_.products_per_update <= 0.0) options_.products_per_update = spec.products_per_configuration;
+}
 
 PmeFarField::PmeFarField(const std::vector<Vec3>& x, const std::vector<double>& a, double mu, Moments m,
                          const Domain& domain, double tolerance, const PmeOptions& opt)
@@ -88,7 +90,7 @@ void PmeFarField::build(const std::vector<Vec3>& x, const std::vector<double>& a
   // Grid and windows in fractional coordinates.
   grid_.M = p_.grid;
   grid_.P = p_.support;
-  grid_.window = Window1D(p_.window, p_.support, p_.shape);
+  grid_.set_window(Window1D(p_.window, p_.support, p_.shape));
   grid_.row = (grid_.M[2] + grid_.P + 3) / 4 * 4;
   set_lattice();
   radius_ = a;

@@ -45,6 +45,12 @@ CostConstants cost_constants(Moments m) {
 }
 constexpr double kFft = 0.25e-9;  // per point and log2(points), one 3D field, forward or backward
 constexpr double kGrid = 2e-9;    // per grid point: Fourier kernel, zeroing, ghost points
+// Set-up of a new configuration (PmeFarField::update_positions), one thread, measured 2026-11-26 by
+// bench/bench_pme_setup.cpp (N = 500 and 10^4, phi 0.05-0.4, 4-160 neighbours): per particle
+// 0.6 us + 0.08 us per support point (windows, slab order, cell binning), per ordered real-space
+// entry 39 / 55 / 62 ns for F / FT / FTS (cell search, pair data, scalar cache).
+constexpr double kSetupParticle = 0.6e-6, kSetupWindow = 0.08e-6;
+double setup_entry(Moments m) { return m == Moments::F ? 39e-9 : m == Moments::FT ? 55e-9 : 62e-9; }
 
 // Gauss-Legendre rules of the model's integrals (engine/core/quadrature.hpp), made once.
 using Quadrature = GaussLegendre;
@@ -205,9 +211,11 @@ PmeParameters pme_parameters(double tol, const Lattice& lattice, int n, double a
   if (opt.fixed) return *opt.fixed;
   // The search costs milliseconds; its inputs repeat for every operator of a run (the grid does not
   // depend on the strain), so results are kept.
-  using Key = std::tuple<double, double, double, double, bool, int, double, double, int, double, double, int, double>;
-  const Key key{tol, lattice.A(0, 0), lattice.A(1, 1), lattice.A(2, 2), lattice.strain != 0.0, n, a_min, a_max,
-                int(m), opt.neighbours, opt.sigma, int(opt.window), opt.self_scale2};
+  using Key =
+      std::tuple<double, double, double, double, bool, int, double, double, int, double, double, int, double, double>;
+  const Key key{tol,    lattice.A(0, 0), lattice.A(1, 1), lattice.A(2, 2), lattice.strain != 0.0,
+                n,      a_min,           a_max,           int(m),          opt.neighbours,
+                opt.sigma, int(opt.window), opt.self_scale2, opt.products_per_update};
   static std::mutex mutex;
   static std::map<Key, PmeParameters> cache;
   {
@@ -241,6 +249,8 @@ PmeParameters search(double tol, const Lattice& lattice, int n, double a_min, do
   const double S2 = opt.self_scale2 > 0.0 ? opt.self_scale2 : pme_self_scale2(a_max, m);
   const double budget = std::pow(kSafety * tol, 2) * S2 / 3.0;  // per part, in e^2
   const CostConstants cc = cost_constants(m);
+  // Set-up per product (0 when the caller prices the product alone).
+  const double setup_share = opt.products_per_update > 0.0 ? 1.0 / opt.products_per_update : 0.0;
   // Real space: the closest neglected pairs are the smallest spheres (gap-based cutoff).
   auto real_error2 = [&](double gap, double xi) {
     double e = 0.0;
@@ -286,7 +296,9 @@ PmeParameters search(double tol, const Lattice& lattice, int n, double a_min, do
       for (int d = 0; d < 3; ++d) M[d] = fft_size(int(std::ceil(sigma * k_in * len[d] / kPi)));
       const double G = double(M[0]) * M[1] * M[2];
       const bool cached = 2.0 * pairs * cc.cache_bytes <= double(RealSpaceSum::kDefaultCacheBytes);
-      const double fixed = (cached ? cc.pair_cached : cc.pair) * pairs + 6.0 * kFft * G * std::log2(G) + kGrid * G;
+      const double setup_pairs = (kSetupParticle * n + setup_entry(m) * 2.0 * pairs) * setup_share;
+      const double fixed =
+          (cached ? cc.pair_cached : cc.pair) * pairs + 6.0 * kFft * G * std::log2(G) + kGrid * G + setup_pairs;
       if (fixed >= best_cost) continue;
       double density_max = 0.0;  // grid points per unit length, largest direction
       for (int d = 0; d < 3; ++d) density_max = std::max(density_max, M[d] / len[d]);
@@ -294,7 +306,7 @@ PmeParameters search(double tol, const Lattice& lattice, int n, double a_min, do
       double sig = std::numeric_limits<double>::infinity();
       for (int d = 0; d < 3; ++d) sig = std::min(sig, M[d] * kPi / (k_in * len[d]));
       for (int P = 3; P <= 32; ++P) {
-        const double cost = fixed + 2.0 * cc.point * n * double(P) * P * P;
+        const double cost = fixed + 2.0 * cc.point * n * double(P) * P * P + kSetupWindow * n * P * setup_share;
         if (cost >= best_cost) break;
         double best_e = std::numeric_limits<double>::infinity(), best_shape = 0.0;
         if (opt.window == WindowKind::kaiser_bessel) {
@@ -326,6 +338,7 @@ PmeParameters search(double tol, const Lattice& lattice, int n, double a_min, do
         best.est_wave = std::sqrt(pme_wave_error2(k_in, xi, a_max, rho, m) / S2);
         best.est_alias = std::sqrt(best_e / S2);
         best.est_cost = cost;
+        best.est_setup = kSetupParticle * n + kSetupWindow * n * P + setup_entry(m) * 2.0 * pairs;
         break;
       }
     }

@@ -27,7 +27,11 @@
 // Cost model. Among all (cutoff, grid upsampling sigma, support P, window shape) meeting the three
 // bounds, the cheapest per product by
 //     t = c_pair(m) pairs + 2 c_point(m) N P^3 + 6 c_fft G log2 G + c_grid G,   G = M0 M1 M2,
-// with the constants measured on the reference machine (bench_ewald, docs/benchmarks.md).
+// plus, when the caller says how many products each configuration gets (products_per_update = n_p),
+// the set-up of a new configuration shared among them:
+//     t += [N (c_particle + c_window P) + c_entry(m) 2 pairs] / n_p
+// (windows and slab order per particle; pair search, pair data and scalar cache per ordered pair),
+// with the constants measured on the reference machine (bench_pme, bench_pme_setup, docs/ewald.md s.4).
 // Lees-Edwards: the grid and all parameters are chosen for the longest reduced a_2 (|gamma'| = Lx / (2 Ly)),
 // so they do not change with the strain (the FFT plans are kept while the box shears).
 #include "ewald/lattice.hpp"
@@ -50,6 +54,7 @@ struct PmeParameters {
   bool sheared = false;         // chosen for every strain (Lees-Edwards)
   // Model estimates (relative to S, see above) and the modelled cost [s] per product.
   double est_real = 0, est_wave = 0, est_alias = 0, est_cost = 0;
+  double est_setup = 0;  // modelled set-up of one configuration [s] (counted in est_cost / products_per_update)
 };
 
 struct PmeOptions {
@@ -60,6 +65,10 @@ struct PmeOptions {
   WindowKind window = WindowKind::kaiser_bessel;
   // Mean square self scale S^2 of the particles (see above); 0 = that of radius a_max.
   double self_scale2 = 0.0;
+  // Products expected per configuration (between position updates): the cost model adds the set-up
+  // divided by it. 0 = price the product alone (many products per configuration). Only the cost
+  // changes with it, never the accuracy. The engine passes MobilitySpec::products_per_configuration.
+  double products_per_update = 0.0;
   // Use these parameters as they are (tests and benchmarks that probe the model's parts).
   std::optional<PmeParameters> fixed;
 };

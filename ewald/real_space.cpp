@@ -322,7 +322,7 @@ void RealSpaceSum::set_positions(const std::vector<Vec3>& x) {
   const double amax = *std::max_element(radius_.begin(), radius_.end());
   const double range = cutoff_gap_ + 2.0 * amax;
   // Cells over fractional coordinates, at least `range` wide between lattice planes
-  // (trees/neighbor_list.hpp); at most about 2 per particle.
+  // (trees/neighbor_list.hpp); at most about 8 per particle (the search visits runs of cells, so empty cells cost little).
   const Vec3& L = domain_.box;
   const double gamma = domain_.reduced_strain();
   const std::array<double, 3> width{L.x() / std::sqrt(1.0 + gamma * gamma), L.y(), L.z()};
@@ -333,7 +333,7 @@ void RealSpaceSum::set_positions(const std::vector<Vec3>& x) {
     if (std::floor(2.0 * width[k] / range) < 5.0) sub = 1;
   std::array<int, 3> nc;
   for (int k = 0; k < 3; ++k) nc[k] = std::max(1, int(std::floor(sub * width[k] / range)));
-  const double cap = std::max(27.0, 2.0 * double(N));
+  const double cap = std::max(27.0, 8.0 * double(N));
   while (double(nc[0]) * nc[1] * nc[2] > cap) {
     int k = 0;
     for (int q = 1; q < 3; ++q)
@@ -421,18 +421,53 @@ void RealSpaceSum::set_positions(const std::vector<Vec3>& x) {
       const int ck = cell[order_[k]];
       const int cx = ck % nc[0], cy = (ck / nc[0]) % nc[1], cz = ck / (nc[0] * nc[1]);
       const int ok = order_[k];
+      // The stencil cells of one (dz, dy) row with consecutive indices and the same image shift
+      // hold consecutive sorted particles: each such run is one range of l (visited in the same
+      // order as cell by cell).
       for (int dz : offs[2])
-        for (int dy : offs[1])
-          for (int dx : offs[0]) {
-            const int px = cx + dx, py = cy + dy, pz = cz + dz;
-            const int qx = (px + nc[0]) % nc[0], qy = (py + nc[1]) % nc[1], qz = (pz + nc[2]) % nc[2];
-            const int q = (qz * nc[1] + qy) * nc[0] + qx;
-            const Vec3 shift = lat * Vec3((px > qx) - (px < qx), (py > qy) - (py < qy), (pz > qz) - (pz < qz));
-            for (long l = start[q]; l < start[q + 1]; ++l) {
+        for (int dy : offs[1]) {
+          const int py = cy + dy, pz = cz + dz;
+          const int qy = (py + nc[1]) % nc[1], qz = (pz + nc[2]) % nc[2];
+          const int row0 = (qz * nc[1] + qy) * nc[0];
+          const int sy = (py > qy) - (py < qy), sz = (pz > qz) - (pz < qz);
+          std::size_t t = 0;
+          while (t < offs[0].size()) {
+            const int px0 = cx + offs[0][t];
+            const int qx0 = (px0 + nc[0]) % nc[0], sx = (px0 > qx0) - (px0 < qx0);
+            int qx1 = qx0;
+            for (++t; t < offs[0].size(); ++t) {
+              const int px = cx + offs[0][t], qx = (px + nc[0]) % nc[0];
+              if (qx != qx1 + 1 || (px > qx) - (px < qx) != sx) break;
+              qx1 = qx;
+            }
+            const Vec3 shift = lat * Vec3(sx, sy, sz);
+            const long l0 = start[row0 + qx0], l1 = start[row0 + qx1 + 1];
+            // With the pre-test: a branch-free pass keeps, in order, the particles within the largest
+            // possible range of k (cutoff_gap + a_k + a_max plus twice the slack, far above the
+            // rounding of the differently ordered sum); the exact tests below run on those only
+            // (random accept/reject branches cost more than the distances).
+            long nc_l = l1 - l0;
+            const int* cand = nullptr;
+            if (pretest) {
+              if (b.candidates.size() < std::size_t(nc_l)) b.candidates.resize(std::size_t(nc_l));
+              int* buf = b.candidates.data();
+              const double bound = cutoff_gap_ + as[k] + amax + 2.0 * slack, bound2 = bound * bound;
+              const double px = wx[k] - shift.x(), py = wy[k] - shift.y(), pz = wz[k] - shift.z();
+              long cnt = 0;
+              for (long l = l0; l < l1; ++l) {
+                const double dx = px - wx[l], dy = py - wy[l], dz = pz - wz[l];
+                buf[cnt] = int(l);
+                cnt += (dx * dx + dy * dy + dz * dz <= bound2);
+              }
+              nc_l = cnt;
+              cand = buf;
+            }
+            for (long t = 0; t < nc_l; ++t) {
+              const long l = cand ? cand[t] : l0 + t;
               if (l == k) continue;
               const int ol = order_[l];
               // Same expressions as trees::neighbor_pairs (pair (i, j) with i < j).
-              const double lim = ok < ol ? cutoff_gap_ + radius_[ok] + radius_[ol] : cutoff_gap_ + radius_[ol] + radius_[ok];
+              const double lim = ok < ol ? cutoff_gap_ + as[k] + as[l] : cutoff_gap_ + as[l] + as[k];
               Vec3 r;
               double dist;
               if (pretest) {
@@ -467,6 +502,7 @@ void RealSpaceSum::set_positions(const std::vector<Vec3>& x) {
               }
             }
           }
+        }
     }
   }
   row_.assign(N + 1, 0);

@@ -153,6 +153,7 @@ class RealSpaceSum {
     std::vector<int> nbr, onbr;
     std::vector<double> ex, ey, ez, dist, odist;
     std::vector<Vec3> oe;
+    std::vector<int> candidates;  // pair search: the cell range's particles within the bound
   };
   std::vector<Block> blocks_;
 };

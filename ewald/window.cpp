@@ -2,7 +2,10 @@
 #include "ewald/window.hpp"
 
 #include <cmath>
+#include <cstdio>
+#include <algorithm>
 #include <stdexcept>
+#include <string>
 
 namespace stokesian::ewald {
 
@@ -81,9 +84,91 @@ double Window1D::transform(double nu) const {
   return P_ * ratio * coef_[0][0];  // coef_[0][0] = 1 / I0(beta)
 }
 
+WindowTable::WindowTable(const Window1D& w) : P_(w.support()) {
+  const int P = P_;
+  // Largest |phi^(d)| on the support, from a fine sampling.
+  std::array<double, 4> scale{};
+  for (int i = 0; i <= 64 * P; ++i) {
+    double v[4];
+    w.derivatives(-0.5 * P + double(i) / 64.0, v);
+    for (int d = 0; d < 4; ++d) scale[d] = std::max(scale[d], std::abs(v[d]));
+  }
+  for (int D = 8;; D += 2) {
+    const int n = D + 1;
+    c_.assign(std::size_t(4) * n * P, 0.0);
+    std::vector<double> node(n), val(std::size_t(4) * n), cheb(n), mono(n), Tprev(n), Tcur(n), Tnext(n);
+    for (int i = 0; i < n; ++i) node[i] = std::cos(kPi * (i + 0.5) / n);
+    for (int j = 0; j < P; ++j) {
+      for (int i = 0; i < n; ++i) {
+        double v[4];
+        w.derivatives(-0.5 * P + j + 0.5 * (node[i] + 1.0), v);
+        for (int d = 0; d < 4; ++d) val[std::size_t(d) * n + i] = v[d];
+      }
+      for (int d = 0; d < 4; ++d) {
+        // Chebyshev coefficients a_m = (2/n) sum_i f_i T_m(t_i) (a_0 halved), then monomials by the
+        // recurrence T_{m+1} = 2 t T_m - T_{m-1} on coefficient vectors.
+        for (int m = 0; m < n; ++m) {
+          double sum = 0.0;
+          for (int i = 0; i < n; ++i) sum += val[std::size_t(d) * n + i] * std::cos(m * kPi * (i + 0.5) / n);
+          cheb[m] = (m == 0 ? 1.0 : 2.0) * sum / n;
+        }
+        std::fill(mono.begin(), mono.end(), 0.0);
+        std::fill(Tprev.begin(), Tprev.end(), 0.0);
+        std::fill(Tcur.begin(), Tcur.end(), 0.0);
+        Tprev[0] = 1.0;  // T_0
+        Tcur[1] = 1.0;   // T_1
+        mono[0] += cheb[0];
+        if (n > 1) mono[1] += cheb[1];
+        for (int m = 2; m < n; ++m) {
+          for (int k = 0; k < n; ++k) Tnext[k] = (k > 0 ? 2.0 * Tcur[k - 1] : 0.0) - Tprev[k];
+          for (int k = 0; k < n; ++k) mono[k] += cheb[m] * Tnext[k];
+          std::swap(Tprev, Tcur);
+          std::swap(Tcur, Tnext);
+        }
+        for (int k = 0; k < n; ++k) c_[(std::size_t(d) * n + (D - k)) * P + j] = mono[k];
+      }
+    }
+    D_ = D;
+    // Error against the series at 4n points per interval (offsets in [0, 1], both ends included).
+    err_ = 0.0;
+    std::vector<double> out(std::size_t(4) * P);
+    for (int i = 0; i <= 4 * n; ++i) {
+      const double tau = double(i) / (4 * n);
+      evaluate(tau, out.data());
+      for (int j = 0; j < P; ++j) {
+        double v[4];
+        w.derivatives(-0.5 * P + j + tau, v);
+        for (int d = 0; d < 4; ++d)
+          if (scale[d] > 0.0) err_ = std::max(err_, std::abs(out[std::size_t(d) * P + j] - v[d]) / scale[d]);
+      }
+    }
+    if (err_ <= kFitError) return;
+    if (D >= 24)
+    {
+      char msg[160];
+      std::snprintf(msg, sizeof msg, "WindowTable: the degree-24 fit of the window (support %d, shape %g) has relative error %.3g > %.3g",
+                    P, w.shape(), err_, kFitError);
+      throw std::runtime_error(msg);
+    }
+  }
+}
+
+void WindowTable::evaluate(double tau, double* out) const {
+  const int P = P_, n = D_ + 1;
+  const double t = 2.0 * tau - 1.0;
+  for (int d = 0; d < 4; ++d) {
+    const double* c = c_.data() + std::size_t(d) * n * P;
+    double* o = out + d * P;
+    for (int j = 0; j < P; ++j) o[j] = c[j];
+    for (int k = 1; k < n; ++k)
+      for (int j = 0; j < P; ++j) o[j] = o[j] * t + c[k * P + j];
+  }
+}
+
 ParticleWindows make_windows(const GridGeometry& g, const std::vector<Vec3>& s_frac, const std::vector<double>& a) {
   const long n = long(s_frac.size());
   const int P = g.P;
+  if (g.table.support() != P) throw std::invalid_argument("make_windows: the grid's window table is not set (GridGeometry::set_window)");
   ParticleWindows win;
   win.P = P;
   win.start.resize(n);
@@ -99,12 +184,8 @@ ParticleWindows make_windows(const GridGeometry& g, const std::vector<Vec3>& s_f
       const double pos = u * g.M[d];  // particle position in grid units, [0, M)
       const int i0 = int(std::ceil(pos - 0.5 * P));
       win.start[p][d] = ((i0 % g.M[d]) + g.M[d]) % g.M[d];
-      double* w = win.w.data() + (p * 3 + d) * 4 * P;
-      for (int j = 0; j < P; ++j) {
-        double v[4];
-        g.window.derivatives((i0 + j) - pos, v);
-        for (int t = 0; t < 4; ++t) w[t * P + j] = v[t];
-      }
+      // Offsets (i0 + j) - pos = -P/2 + j + tau (WindowTable).
+      g.table.evaluate((i0 - pos) + 0.5 * P, win.w.data() + (p * 3 + d) * 4 * P);
     }
   }
   return win;

@@ -58,10 +58,43 @@ class Window1D {
   std::array<std::vector<double>, 4> coef_;
 };
 
+// The window as one polynomial per grid interval, for evaluating all P offsets of a particle at
+// once. A particle's offsets are delta_j = -P/2 + j + tau (j = 0 .. P-1) with one tau in [0, 1)
+// (window.hpp header: i0 = ceil(M s - P/2)), so interval j holds phi^(d)(-P/2 + j + tau) as a
+// polynomial of degree D in t = 2 tau - 1: Chebyshev interpolation of Window1D::derivatives at D + 1
+// Chebyshev points, stored as monomial coefficients and evaluated by Horner's rule across the P
+// intervals at once (contiguous, vectorisable). D is the smallest of 8, 10, ..., 24 whose error,
+// measured against Window1D::derivatives at 4 (D + 1) points per interval, is at most kFitError
+// times the largest |phi^(d)| on the support, per derivative d; the constructor throws
+// std::runtime_error if D = 24 does not reach it (tests/test_ewald.cpp sweeps the windows the
+// parameter search can choose: P = 3..32, Kaiser-Bessel beta = 0.9..1.5 pi P (1 - 1/(2 sigma)),
+// sigma = 1..2, and Gaussians).
+class WindowTable {
+ public:
+  static constexpr double kFitError = 3e-14;
+  WindowTable() = default;
+  explicit WindowTable(const Window1D& w);
+  int support() const { return P_; }
+  int degree() const { return D_; }
+  double fit_error() const { return err_; }  // measured, relative (see above)
+  // out[d * P + j] = phi^(d)(-P/2 + j + tau), d = 0..3, j = 0..P-1, tau in [0, 1].
+  void evaluate(double tau, double* out) const;
+
+ private:
+  int P_ = 0, D_ = 0;
+  double err_ = 0.0;
+  std::vector<double> c_;  // [d][power D..0][j]
+};
+
 struct GridGeometry {
   std::array<int, 3> M{};      // grid points per lattice direction
   int P = 4;                   // support (points per direction)
   Window1D window;
+  WindowTable table;           // window's polynomial form (make_windows); set with set_window
+  void set_window(const Window1D& w) {
+    window = w;
+    table = WindowTable(w);
+  }
   Mat3 J = Mat3::Identity();   // diag(M) A^{-1}
   Mat3 lap = Mat3::Zero();     // Gt = J J^T
   int row = 0;                 // stored length of a direction-2 row: M2 + P (ghost points, spread.hpp)

@@ -293,19 +293,26 @@ TEST_CASE("PME: requested tolerance met from 1e-2 to 1e-10 (F, FT, FTS; polydisp
       const VecX x = random_vector(ref.size(), 7);
       VecX yref;
       ref.apply(x, yref);
-      for (double tol : {1e-2, 1e-4, 1e-6, 1e-8, 1e-10}) {
-        const ewald::PmeFarField pme(c.x, c.a, 1.0, m, dom, tol);
-        VecX y;
-        pme.apply(x, y);
-        const double err = rel_error(y, yref);
-        CAPTURE(cs.n);
-        CAPTURE(to_string(m));
-        CAPTURE(tol);
-        CHECK(err < tol);
-        if (cs.amin == cs.amax) CHECK(err > 0.05 * tol);
-        std::printf("pme-sweep n=%d strain=%.2f %s tol=%.0e err=%.2e M=%d P=%d pairs=%zu\n", cs.n, cs.strain,
-                    to_string(m), tol, err, pme.parameters().grid[0], pme.parameters().support, pme.real_pairs());
-      }
+      // Parameters priced for many products per configuration (0) and with the set-up priced for
+      // one product (far-field dynamics): other parameters, the same accuracy contract.
+      for (double ppu : {0.0, 1.0})
+        for (double tol : {1e-2, 1e-4, 1e-6, 1e-8, 1e-10}) {
+          ewald::PmeOptions o;
+          o.products_per_update = ppu;
+          const ewald::PmeFarField pme(c.x, c.a, 1.0, m, dom, tol, o);
+          VecX y;
+          pme.apply(x, y);
+          const double err = rel_error(y, yref);
+          CAPTURE(cs.n);
+          CAPTURE(to_string(m));
+          CAPTURE(tol);
+          CAPTURE(ppu);
+          CHECK(err < tol);
+          if (cs.amin == cs.amax) CHECK(err > 0.05 * tol);
+          std::printf("pme-sweep n=%d strain=%.2f %s ppu=%g tol=%.0e err=%.2e M=%d P=%d pairs=%zu\n", cs.n, cs.strain,
+                      to_string(m), ppu, tol, err, pme.parameters().grid[0], pme.parameters().support,
+                      pme.real_pairs());
+        }
     }
   }
 }
@@ -455,13 +462,64 @@ TEST_CASE("PME window: transforms match quadrature, derivatives match finite dif
   }
 }
 
+TEST_CASE("PME window table: the polynomial form equals the window's series over the searched range") {
+  // Reference twin: Window1D::derivatives (power series of I0, exact to rounding). Every window the
+  // parameter search can choose (P = 3..32, beta = kappa pi P (1 - 1/(2 sigma)), kappa 0.9..1.5,
+  // sigma 1..2) and Gaussians of the widths it uses; tolerance kFitError of each derivative's largest
+  // value, at offsets other than the fitting and checking points.
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  int checked = 0;
+  double worst = 0.0;
+  for (int P = 3; P <= 32; ++P)
+    for (double kappa : {0.9, 1.2, 1.5})
+      for (double sigma : {1.0, 1.35, 2.0}) {
+        const ewald::Window1D w(ewald::WindowKind::kaiser_bessel, P, kappa * pi * P * (1.0 - 0.5 / sigma));
+        const ewald::WindowTable t(w);
+        CAPTURE(P);
+        CAPTURE(kappa);
+        CAPTURE(sigma);
+        REQUIRE(t.fit_error() <= ewald::WindowTable::kFitError);
+        std::array<double, 4> scale{};
+        for (int i = 0; i <= 64 * P; ++i) {
+          double v[4];
+          w.derivatives(-0.5 * P + i / 64.0, v);
+          for (int d = 0; d < 4; ++d) scale[d] = std::max(scale[d], std::abs(v[d]));
+        }
+        std::vector<double> out(4 * P);
+        for (int r = 0; r < 20; ++r) {
+          const double tau = u01(rng);
+          t.evaluate(tau, out.data());
+          for (int j = 0; j < P; ++j) {
+            double v[4];
+            w.derivatives(-0.5 * P + j + tau, v);
+            for (int d = 0; d < 4; ++d) worst = std::max(worst, std::abs(out[d * P + j] - v[d]) / scale[d]);
+          }
+        }
+        ++checked;
+      }
+  // Gaussians as the search chooses them (support and width from pme_parameters).
+  const ewald::Lattice lat = ewald::Lattice::from_domain(box(Vec3(20.0, 20.0, 20.0)));
+  for (double tol : {1e-2, 1e-4, 1e-6, 1e-8, 1e-10}) {
+    ewald::PmeOptions o;
+    o.window = ewald::WindowKind::gaussian;
+    const ewald::PmeParameters p = ewald::pme_parameters(tol, lat, 500, 1.0, 1.0, Moments::FTS, o);
+    const ewald::WindowTable t(ewald::Window1D(ewald::WindowKind::gaussian, p.support, p.shape));
+    CAPTURE(tol);
+    CHECK(t.fit_error() <= ewald::WindowTable::kFitError);
+  }
+  MESSAGE("window tables: " << checked << " Kaiser-Bessel windows, worst relative error at random offsets " << worst);
+  CHECK(checked == 30 * 9);
+  CHECK(worst <= 2.0 * ewald::WindowTable::kFitError);
+}
+
 TEST_CASE("PME spreading and interpolation: separable fast path equals a plain point-by-point sum") {
   // Reference: for every particle and every grid point of its window, W, grad W and lap W from the
   // 1D derivatives directly (no row coefficients, no ghost points), accumulated on an unpadded grid.
   ewald::GridGeometry g;
   g.M = {12, 10, 14};
   g.P = 6;
-  g.window = ewald::Window1D(ewald::WindowKind::kaiser_bessel, g.P, 14.0);
+  g.set_window(ewald::Window1D(ewald::WindowKind::kaiser_bessel, g.P, 14.0));
   const Domain dom = box(Vec3(9.0, 8.0, 10.0), 0.3);
   const ewald::Lattice lat = ewald::Lattice::from_domain(dom);
   for (int d = 0; d < 3; ++d) g.J.row(d) = g.M[d] * lat.Ainv.row(d);
@@ -471,6 +529,25 @@ TEST_CASE("PME spreading and interpolation: separable fast path equals a plain p
   std::vector<Vec3> s;
   for (const Vec3& x : c.x) s.push_back(lat.Ainv * x);
   const ewald::ParticleWindows win = ewald::make_windows(g, s, c.a);
+  // The windows from the table equal the series at the particles' offsets (WindowTable::kFitError of
+  // each derivative's largest value).
+  std::array<double, 4> wscale{};
+  for (int i = 0; i <= 64 * g.P; ++i) {
+    double v[4];
+    g.window.derivatives(-0.5 * g.P + i / 64.0, v);
+    for (int k = 0; k < 4; ++k) wscale[k] = std::max(wscale[k], std::abs(v[k]));
+  }
+  for (long p = 0; p < 7; ++p)
+    for (int dir = 0; dir < 3; ++dir) {
+      const double pos = (s[p][dir] - std::floor(s[p][dir])) * g.M[dir];
+      const int i0 = int(std::ceil(pos - 0.5 * g.P));
+      CHECK(win.start[p][dir] == ((i0 % g.M[dir]) + g.M[dir]) % g.M[dir]);
+      for (int j = 0; j < g.P; ++j) {
+        double v[4];
+        g.window.derivatives((i0 + j) - pos, v);
+        for (int k = 0; k < 4; ++k) CHECK(std::abs(win.at(p, dir, k)[j] - v[k]) <= ewald::WindowTable::kFitError * wscale[k]);
+      }
+    }
   const auto colouring = ewald::colour_slabs(g, win);
   const auto& basis = sym_traceless_basis();
   for (Moments m : {Moments::F, Moments::FT, Moments::FTS}) {

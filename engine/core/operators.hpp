@@ -43,6 +43,10 @@ struct MobilitySpec {
   Moments moments = Moments::F;
   double viscosity = 1.0;   // mu
   double tolerance = 1e-6;  // requested relative accuracy of products (methods with knobs)
+  // Products expected per configuration (set_configuration): methods whose set-up costs about a
+  // product weigh it by 1 / this when they choose their knobs (PME). 0 = price the product alone.
+  // A cost hint only: the accuracy does not depend on it.
+  double products_per_configuration = 0.0;
 };
 
 class MobilityOperator {
