@@ -45,12 +45,13 @@ CostConstants cost_constants(Moments m) {
 }
 constexpr double kFft = 0.25e-9;  // per point and log2(points), one 3D field, forward or backward
 constexpr double kGrid = 2e-9;    // per grid point: Fourier kernel, zeroing, ghost points
-// Set-up of a new configuration (PmeFarField::update_positions), one thread, measured 2026-11-26 by
-// bench/bench_pme_setup.cpp (N = 500 and 10^4, phi 0.05-0.4, 4-160 neighbours): per particle
-// 0.6 us + 0.08 us per support point (windows, slab order, cell binning), per ordered real-space
-// entry 39 / 55 / 62 ns for F / FT / FTS (cell search, pair data, scalar cache).
-constexpr double kSetupParticle = 0.6e-6, kSetupWindow = 0.08e-6;
-double setup_entry(Moments m) { return m == Moments::F ? 39e-9 : m == Moments::FT ? 55e-9 : 62e-9; }
+// Set-up of a new configuration (PmeFarField::update_positions), one thread, fitted 2026-11-26 to
+// bench/bench_pme_setup.cpp (N = 500-10^4, phi 0.05-0.4, F/FT/FTS, 3-230 entries per particle;
+// bench/plot_pme_setup.py prints the fit): per particle 0.55 us + 0.12 us per support point
+// (windows, slab order, cell binning), per ordered real-space entry 22 / 40 / 48 ns for F / FT / FTS
+// (cell search, pair data, scalar cache).
+constexpr double kSetupParticle = 0.55e-6, kSetupWindow = 0.12e-6;
+double setup_entry(Moments m) { return m == Moments::F ? 22e-9 : m == Moments::FT ? 40e-9 : 48e-9; }
 
 // Gauss-Legendre rules of the model's integrals (engine/core/quadrature.hpp), made once.
 using Quadrature = GaussLegendre;
