@@ -97,7 +97,7 @@ def main():
         rc = {r["params"]["ppu"]: r["phases"] for r in choice if int(r["params"]["case"]) == c}
         if not all(k in rc for k in (0.0, 1.0, 20.0)):
             continue
-        labels.append(label(c).replace(" tol", "\ntol"))
+        labels.append(label(c).replace(" phi", "\nphi").replace(" tol", "\ntol"))
         t1_old.append(rc[0.0]["setup"] + rc[0.0]["product"])
         t1_new.append(rc[1.0]["setup"] + rc[1.0]["product"])
         t20_old.append(rc[0.0]["setup"] + 20 * rc[0.0]["product"])

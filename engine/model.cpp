@@ -405,6 +405,12 @@ ResolvedModel resolve_model(const Scene& s) {
                                  "sample it every step)");
     }
   }
+  if (m.level != HydroModel::free_draining && m.far_field == "pme") {
+    std::ostringstream o;
+    o << "pme cost model: set-up shared by about " << far_field_products_per_configuration(m)
+      << " far-field products per configuration (engine/model.hpp; cost only, not accuracy)";
+    m.reasons.push_back(o.str());
+  }
   if (m.brownian && !integ->stochastic)
     unavailable(s, "time", "integrator", "\"" + integ->name + "\" is deterministic; with fluid.kT > 0 use " +
                                              [] {
