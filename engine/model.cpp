@@ -407,8 +407,9 @@ ResolvedModel resolve_model(const Scene& s) {
   }
   if (m.level != HydroModel::free_draining && m.far_field == "pme") {
     std::ostringstream o;
-    o << "pme cost model: set-up shared by about " << far_field_products_per_configuration(m)
-      << " far-field products per configuration (engine/model.hpp; cost only, not accuracy)";
+    const double np = far_field_products_per_configuration(m);
+    o << "pme cost model: a new configuration's set-up priced against about " << np << " far-field product"
+      << (np == 1.0 ? "" : "s") << " per configuration (engine/model.hpp; cost only, not accuracy)";
     m.reasons.push_back(o.str());
   }
   if (m.brownian && !integ->stochastic)
