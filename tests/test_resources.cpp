@@ -90,8 +90,10 @@ TEST_CASE("PME grid of a given box: the operator's own grid, 3 padded fields, th
   const ResourceEstimate e = estimate_resources(s, m);
   const ResourceComponent* grid = e.find("PME grid");
   REQUIRE(grid);
-  // The grid the operator itself builds for this configuration.
-  ewald::PmeFarField op(MobilitySpec{Moments::F, 1.0, 1e-4});
+  // The grid the operator itself builds for this configuration, with the cost hint the engine
+  // passes (engine/hydrodynamics.cpp): one product per configuration for forces given at F.
+  CHECK(far_field_products_per_configuration(m) == 1.0);
+  ewald::PmeFarField op(MobilitySpec{Moments::F, 1.0, 1e-4, far_field_products_per_configuration(m)});
   op.set_configuration(Configuration{s.positions, s.radii, s.domain});
   const auto M = op.parameters().grid;
   const int P = op.parameters().support;

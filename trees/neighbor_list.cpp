@@ -56,6 +56,11 @@ struct CellGrid {
   bool wrap = false;
   std::vector<std::array<int, 3>> cell_of;  // per particle
   std::vector<int> start, members;          // CSR: members[start[c] .. start[c+1]) in index order
+  // Per member (CSR order): the wrapped position A s (periodic; x in open space) and the index.
+  // A stencil cell's image of member j is w_j + A shift, so |w_i - w_j - A shift| is the distance
+  // of that image: a cheap pre-test before the exact minimum image.
+  std::vector<double> wx, wy, wz;
+  Mat3 lattice = Mat3::Identity();
 
   int id(int cx, int cy, int cz) const { return (cz * n[1] + cy) * n[0] + cx; }
 };
@@ -117,6 +122,17 @@ bool build_grid(const std::vector<Vec3>& x, const Domain& domain, double range, 
   std::vector<int> fill(count.begin(), count.end() - 1);
   for (std::size_t i = 0; i < N; ++i)
     g.members[fill[g.id(g.cell_of[i][0], g.cell_of[i][1], g.cell_of[i][2])]++] = static_cast<int>(i);
+  g.wx.resize(N);
+  g.wy.resize(N);
+  g.wz.resize(N);
+  if (g.wrap) g.lattice = domain.lattice();
+  for (std::size_t m = 0; m < N; ++m) {
+    const int i = g.members[m];
+    const Vec3 w = g.wrap ? Vec3(g.lattice * s[i]) : x[i];
+    g.wx[m] = w.x();
+    g.wy[m] = w.y();
+    g.wz[m] = w.z();
+  }
   return true;
 }
 
@@ -163,6 +179,13 @@ std::vector<NeighborPair> neighbor_pairs(const std::vector<Vec3>& x, const std::
   if (!build_grid(x, domain, range, g)) return neighbor_pairs_bruteforce(x, radius, domain, cutoff_gap);
 
   const int N = static_cast<int>(x.size());
+  // Position of each particle in the CSR order (its w).
+  std::vector<int> slot(N);
+  for (int m = 0; m < N; ++m) slot[g.members[m]] = m;
+  const double amax = max_radius(radius);
+  // The pre-test keeps a superset of the pairs: its bound exceeds every pair's range by a slack
+  // far above the rounding of the two ways of forming the separation.
+  const double slack = 1e-9 * (g.wrap ? domain.box.maxCoeff() + range : range + 1.0);
   // Each thread collects into its own vector; the final sort makes the order thread-independent
   // (every pair's r is computed by the same expression whichever thread finds it).
 #pragma omp parallel if (N >= parallel::kNeighborParticles)
@@ -171,21 +194,31 @@ std::vector<NeighborPair> neighbor_pairs(const std::vector<Vec3>& x, const std::
 #pragma omp for schedule(static) nowait
     for (int i = 0; i < N; ++i) {
       const auto& c = g.cell_of[i];
+      const int si = slot[i];
+      const double bound = cutoff_gap + radius[i] + amax + slack, bound2 = bound * bound;
       for (int dz = -1; dz <= 1; ++dz)
         for (int dy = -1; dy <= 1; ++dy)
           for (int dx = -1; dx <= 1; ++dx) {
             std::array<int, 3> nb{c[0] + dx, c[1] + dy, c[2] + dz};
+            std::array<int, 3> wrapped{0, 0, 0};
             bool inside = true;
             for (int k = 0; k < 3; ++k) {
-              if (g.wrap)
+              if (g.wrap) {
+                wrapped[k] = (nb[k] >= g.n[k]) - (nb[k] < 0);
                 nb[k] = (nb[k] + g.n[k]) % g.n[k];
-              else if (nb[k] < 0 || nb[k] >= g.n[k])
+              } else if (nb[k] < 0 || nb[k] >= g.n[k]) {
                 inside = false;
+              }
             }
             if (!inside) continue;
             const int cell = g.id(nb[0], nb[1], nb[2]);
+            // The stencil cell's image of w_j is w_j + A wrapped.
+            const Vec3 shift = g.wrap ? Vec3(g.lattice * Vec3(wrapped[0], wrapped[1], wrapped[2])) : Vec3::Zero();
+            const double px = g.wx[si] - shift.x(), py = g.wy[si] - shift.y(), pz = g.wz[si] - shift.z();
             NeighborPair p;
             for (int m = g.start[cell]; m < g.start[cell + 1]; ++m) {
+              const double ex = px - g.wx[m], ey = py - g.wy[m], ez = pz - g.wz[m];
+              if (ex * ex + ey * ey + ez * ez > bound2) continue;
               const int j = g.members[m];
               if (j > i && pair_in_range(x, radius, domain, cutoff_gap, i, j, p)) local.push_back(p);
             }

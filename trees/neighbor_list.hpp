@@ -7,7 +7,10 @@
 // along each lattice direction with n_k = floor(w_k / R), where R = cutoff_gap + 2 max(a) is the largest interaction range and w_k the distance between
 // lattice planes (w_x = Lx / sqrt(1 + gamma'^2) with gamma' the strain reduced to
 // |gamma' Ly| <= Lx/2, w_y = Ly, w_z = Lz). Two centres closer than R then differ by at most one
-// cell index in each direction, so the 27-cell stencil finds every pair.
+// cell index in each direction, so the 27-cell stencil finds every pair. Each candidate is first
+// tested on its stencil cell's image (wrapped positions A s, shifted by the lattice vector of the
+// wrap) against cutoff_gap + a_i + max(a) plus a slack of 1e-9 of the box; only those within it
+// take the exact minimum-image test, so the pair set and every r are those of the plain search.
 //
 // Contract (periodic): each unordered pair appears at most once, with r the minimum image. That
 // representation is exact only if no pair has two images in range, which holds when
