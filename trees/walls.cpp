@@ -124,6 +124,18 @@ std::vector<Vec3> fill_outline(const ChannelParams& c, long count, double a, dou
     lo = lo.cwiseMin(p);
     hi = hi.cwiseMax(p);
   }
+  // Random sequential adsorption of discs jams at an areal fraction of 0.547 in the plane (Feder
+  // 1980, J. Theor. Biol. 87, 237; 0.547069, Hinrichsen, Feder & Jossang 1986), less beside walls:
+  // a request above it cannot be met, so it fails at once instead of after 1000 trials per particle.
+  constexpr double kRsaJamming = 0.547;
+  const double asked = double(count) * kPi * a * a / o.area;
+  if (asked > kRsaJamming) {
+    std::ostringstream e;
+    e << "only about " << long(kRsaJamming * o.area / (kPi * a * a)) << " of " << count << " particles of radius " << a
+      << " a fit at random in the outline's " << o.area << " a^2 of fluid (areal fraction " << asked
+      << " asked; random placement jams at " << kRsaJamming << ")";
+    throw std::invalid_argument(e.str());
+  }
   RandomStream rs = RandomStream::for_purpose(seed, Purpose::placement, 2);
   std::vector<Vec3> out;
   PlaneBins taken(2.0 * a + min_gap);
