@@ -108,11 +108,15 @@ std::string solver_of(const ResolvedModel& m) {
   return "";
 }
 
-double far_field_products_per_configuration(const ResolvedModel& m) {
+double far_field_products_per_solve(const ResolvedModel& m) {
   if (m.level == HydroModel::free_draining) return 0.0;
   const bool given_velocities = m.moments == Moments::FTS || m.fixed_particles;
-  const double solve = solver_of(m) == "mobility_cg" && !given_velocities ? 1.0 : 20.0;
-  return solve + (m.brownian ? 15.0 : 0.0);
+  return solver_of(m) == "mobility_cg" && !given_velocities ? 1.0 : 20.0;
+}
+
+double far_field_products_per_configuration(const ResolvedModel& m) {
+  if (m.level == HydroModel::free_draining) return 0.0;
+  return far_field_products_per_solve(m) + (m.brownian ? 15.0 : 0.0);
 }
 
 std::string ResolvedModel::describe() const {

@@ -37,12 +37,13 @@ ResolvedModel resolve_model(const Scene& scene);
 // The solver a model names, or the first registered solver of its level.
 std::string solver_of(const ResolvedModel& m);
 
-// Far-field products the model's solver typically makes per configuration: 1 for a mobility
-// product with given forces, 20 for an iterative solve (CG with given velocities: fixed particles
-// or FTS; accelerated SD: 20-30 GMRES products per solve, bench_asd), plus 15 with Brownian motion
-// (a Lanczos force of 26-65 products at the first of the Fixman step's two configurations,
-// bench_brownian). A cost hint (MobilitySpec::products_per_configuration), not an accuracy knob;
-// 0 at free draining.
+// Far-field products of one deterministic solve: 1 for a mobility product with given forces, 20
+// for an iterative solve (CG with given velocities: fixed particles or FTS; accelerated SD: 20-30
+// GMRES products per solve, bench_asd); 0 at free draining. Used by the resource estimate.
+double far_field_products_per_solve(const ResolvedModel& m);
+// Far-field products per configuration: a solve, plus 15 with Brownian motion (a Lanczos force of
+// 26-65 products at the first of the Fixman step's two configurations, bench_brownian). A cost hint
+// (MobilitySpec::products_per_configuration), not an accuracy knob; 0 at free draining.
 double far_field_products_per_configuration(const ResolvedModel& m);
 
 }  // namespace stokesian

@@ -200,16 +200,14 @@ ResourceEstimate estimate_resources(const Scene& s, const ResolvedModel& model) 
                                   std::string(model.brownian ? ", Lanczos basis" : "") + "), " + dN,
                               model_keys});
       // one product, or ~20 CG iterations when velocities are given (fixed particles, FTS strain)
-      const bool constrained = model.moments == Moments::FTS ||
-                               std::any_of(s.fixed.begin(), s.fixed.end(), [](char f) { return f != 0; });
-      eval_seconds += (constrained ? 20 : 1) * product;
+      eval_seconds += far_field_products_per_solve(model) * product;
     } else if (solver == "dense_sd") {
       e.components.push_back({"SD resistance and factors", 3 * 8.0 * n * n,
                               "3 (d N)^2 doubles: resistance, constrained block, its Cholesky factor; " + dN,
                               model_keys});
       eval_seconds += 5.0 / 3.0 * n * n * n / 5e9 + 7e-6 * N * N / 2 * (d * d / 121.0);
     } else {
-      eval_seconds += 20 * product;
+      eval_seconds += far_field_products_per_solve(model) * product;
     }
     if (model.brownian) eval_seconds += 30 * product / evaluations;  // one square root per step
     if (model.level == HydroModel::stokesian) {

@@ -194,6 +194,12 @@ mean_velocity = 1.0
                     doctest::Contains("[walls] outline: the inlet (edge 1) must be one of the openings"));
   CHECK_THROWS_WITH(io::parse_scene(base + "[particles]\ngenerate = \"random\"\ncount = 5000\n", "tj.toml"),
                     doctest::Contains("[particles] count: only"));
+  // Above the jamming fraction of random sequential adsorption of discs (0.547, Feder 1980) the fill
+  // is refused before any trial, naming the count that fits: 0.547 x 2800 a^2 / pi = 487.
+  CHECK_THROWS_WITH(io::parse_scene(base + "[particles]\ngenerate = \"random\"\ncount = 5000\n", "tj.toml"),
+                    doctest::Contains("only about 487 of 5000"));
+  CHECK_THROWS_WITH(io::parse_scene(base + "[particles]\ngenerate = \"random\"\ncount = 5000\n", "tj.toml"),
+                    doctest::Contains("random placement jams at 0.547"));
   CHECK_THROWS_WITH(io::parse_scene("[domain]\nkind = \"periodic\"\nbox = [10, 10, 10]\n" + base +
                                         "[particles]\npositions = [[10.0, 10.0, 0.0]]\n", "tj.toml"),
                     doctest::Contains("\"outline\" is for open domains"));
