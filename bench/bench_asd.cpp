@@ -63,7 +63,7 @@ struct Run {
 Run run_accelerated(const Suspension& s, double tol, double shift, AcceleratedStokesianDynamics::Method method,
                     double factor_gap = AcceleratedStokesianDynamics::kFactorGap) {
   const double mu = 1.0;
-  const AccuracyKnobs k = derive_knobs(tol, HydroModel::stokesian);
+  const AccuracyKnobs k = derive_knobs(tol, HydroModel::stokesian, 1.0, false);
   auto op = far_field_methods().find(s.domain.periodic() ? "pme" : "direct")->make(MobilitySpec{Moments::FTS, mu, k.far_field});
   AcceleratedStokesianDynamics sd(std::move(op), mu, lubrication::NearFieldParams{}, k.krylov, shift, method,
                                   factor_gap);

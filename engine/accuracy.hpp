@@ -16,6 +16,10 @@
 
 namespace stokesian {
 
+// The accelerated SD Krylov residual as a fraction of the tolerance (measured: engine/accuracy.cpp);
+// the solver also uses it to recover the tolerance from its residual (engine/sd_accelerated.cpp).
+inline constexpr double kKrylovFactor = 0.02;
+
 struct AccuracyKnobs {
   double far_field = 1e-6;  // relative accuracy asked of far-field products (MobilitySpec::tolerance)
   double krylov = 1e-6;     // relative residual of the accelerated SD Krylov solve
@@ -25,7 +29,8 @@ struct AccuracyKnobs {
 
 // The knobs for a solve at `level` (far-field solves keep far_field = mobility_cg = tolerance,
 // whose achieved error tests/test_mobility.cpp checks). radius_ratio = a_max / a_min of the
-// particles (>= 1).
-AccuracyKnobs derive_knobs(double tolerance, HydroModel level, double radius_ratio = 1.0);
+// particles (>= 1); held_particles: the scene has fixed particles (Stokesian dynamics then asks the
+// far field a tenth more, engine/accuracy.cpp).
+AccuracyKnobs derive_knobs(double tolerance, HydroModel level, double radius_ratio, bool held_particles);
 
 }  // namespace stokesian

@@ -12,7 +12,7 @@ Hydrodynamics::Hydrodynamics(const ResolvedModel& model, double viscosity, std::
   const SolverEntry* solver = hydro_solvers().find(solver_of(model_));
   if (!solver) throw std::invalid_argument("Hydrodynamics: no solver \"" + solver_of(model_) + "\"");
   SolverSetup setup;
-  setup.knobs = derive_knobs(tolerance, model_.level, radius_ratio);
+  setup.knobs = derive_knobs(tolerance, model_.level, radius_ratio, model_.fixed_particles);
   setup.spec = MobilitySpec{model_.moments, viscosity, setup.knobs.far_field,
                             far_field_products_per_configuration(model_)};
   setup.near_field = near_field;

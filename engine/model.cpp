@@ -307,7 +307,7 @@ ResolvedModel resolve_model(const Scene& s) {
       if (!periodic && !s.radii.empty()) {
         // the octree beyond its measured crossover with the direct sum at the products' tolerance
         const auto [a_lo, a_hi] = std::minmax_element(s.radii.begin(), s.radii.end());
-        const double ff_tol = derive_knobs(s.hydro.tolerance, m.level, *a_hi / *a_lo).far_field;
+        const double ff_tol = derive_knobs(s.hydro.tolerance, m.level, *a_hi / *a_lo, m.fixed_particles).far_field;
         const long from = trees::tree_auto_from(ff_tol, m.moments);
         std::ostringstream o;
         if (from > 0 && long(n) >= from) {

@@ -149,7 +149,7 @@ ResourceEstimate estimate_resources(const Scene& s, const ResolvedModel& model) 
     } else if (model.far_field == "pme") {
       try {
         const ewald::Lattice lattice = ewald::Lattice::from_domain(s.domain);
-        const double ff_tol = derive_knobs(s.hydro.tolerance, model.level, a_max / a_min).far_field;  // as the run asks
+        const double ff_tol = derive_knobs(s.hydro.tolerance, model.level, a_max / a_min, model.fixed_particles).far_field;  // as the run asks
         ewald::PmeOptions po;  // as the run's operator chooses them (engine/hydrodynamics.cpp)
         po.products_per_update = far_field_products_per_configuration(model);
         const ewald::PmeParameters p =
@@ -181,7 +181,7 @@ ResourceEstimate estimate_resources(const Scene& s, const ResolvedModel& model) 
         // The box is too small for the minimum-image real-space sum: the operator reports it.
       }
     } else if (model.far_field == "tree") {
-      const double ff_tol = derive_knobs(s.hydro.tolerance, model.level, a_max / a_min).far_field;
+      const double ff_tol = derive_knobs(s.hydro.tolerance, model.level, a_max / a_min, model.fixed_particles).far_field;
       const trees::TreeParameters p = trees::tree_parameters(std::max(ff_tol, 1e-14), model.moments);
       Keys tk = model_keys;
       add_key(tk, s, "hydrodynamics", "tolerance");

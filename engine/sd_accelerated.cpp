@@ -1,15 +1,18 @@
 #include "engine/sd_accelerated.hpp"
 
+#include "engine/accuracy.hpp"
 #include "engine/brownian.hpp"
 
 #include "engine/core/errors.hpp"
 #include "engine/core/parallel.hpp"
 #include "engine/kernels/far_field.hpp"
+#include "ewald/ewald_reference.hpp"
 
 #include <algorithm>
 #include <chrono>
 #include <numeric>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 namespace stokesian {
@@ -126,8 +129,10 @@ void AcceleratedStokesianDynamics::factorise_held(const std::vector<long>& v) {
     }
   // Held particles do not move: the blocks of the last configuration are kept while the held
   // particles, their centres and radii are the same (bitwise).
-  if (!held_lu_.empty() && held == held_ids_ && held_x == held_x_ && held_a == held_a_ &&
-      !config_.domain.periodic() && held_precondition_) {
+  const double strain = config_.domain.reduced_strain();
+  if (!held_lu_.empty() && held == held_ids_ && held_x == held_x_ && held_a == held_a_ && held_precondition_ &&
+      config_.domain.kind == held_domain_.kind && config_.domain.box == held_domain_.box &&
+      std::abs(strain - held_domain_.reduced_strain()) <= kHeldStrainReuse) {
     stats_.seconds_held_preconditioner = seconds_since(t0);
     return;
   }
@@ -136,11 +141,8 @@ void AcceleratedStokesianDynamics::factorise_held(const std::vector<long>& v) {
   held_ids_ = held;
   held_x_ = held_x;
   held_a_ = held_a;
-  // Open domains only: in a periodic box the Ewald-summed blocks differ from the open ones by
-  // O(a/L), and the open blocks raised the iterations there (measured at phi = 0.2 with 90 % held:
-  // 30 -> 38 at N = 60 whatever the cluster size, 51 -> 54 at N = 1000 even with Hasimoto's
-  // lattice correction -2.8373 / (6 pi mu L) on the translational entries).
-  if (held_precondition_ && !held.empty() && !config_.domain.periodic()) {
+  held_domain_ = config_.domain;
+  if (held_precondition_ && !held.empty()) {
     // Centres of the held particles (an open domain: as they are).
     std::vector<Vec3> x(held.size());
     for (std::size_t k = 0; k < held.size(); ++k) x[k] = config_.x[std::size_t(held[k])];
@@ -169,6 +171,8 @@ void AcceleratedStokesianDynamics::factorise_held(const std::vector<long>& v) {
       todo.emplace_back(mid, hi);
     }
     std::sort(clusters.begin(), clusters.end());  // a fixed order, independent of the work list
+    ewald::EwaldReferenceOptions ewald_options;
+    ewald_options.tail = kHeldEwaldTail;
     held_entries_.resize(clusters.size());
     held_lu_.resize(clusters.size());
     for (std::size_t c = 0; c < clusters.size(); ++c) {
@@ -181,7 +185,8 @@ void AcceleratedStokesianDynamics::factorise_held(const std::vector<long>& v) {
         ac.push_back(config_.a[std::size_t(i)]);
         for (int q = 0; q < d; ++q) entries.push_back(i * d + q);
       }
-      MatX P = assemble_mobility(xc, ac, mu_, m_);
+      MatX P = config_.domain.periodic() ? ewald::ewald_mobility(xc, ac, mu_, m_, config_.domain, ewald_options)
+                                         : assemble_mobility(xc, ac, mu_, m_);
       for (std::size_t r = 0; r < entries.size(); ++r) P.row(long(r)) *= D_[entries[r]];
       held_lu_[c].compute(P);
     }
@@ -263,42 +268,121 @@ HydroResult AcceleratedStokesianDynamics::solve(const HydroProblem& p) {
     A(Py, out);
   };
   const LinearOperator& Aused = held_lu_.empty() ? A : AP;
-  VecX W = VecX::Zero(n);
-  const KrylovResult kr = method_ == Method::gmres ? gmres(Aused, b, W, tol_, kMaxIterations, kRestart)
-                                                   : bicgstab(Aused, b, W, tol_, kMaxIterations);
-  apply_held_inverse(W);
-  products += kr.products;
-  stats_.iterations = kr.iterations;
-  stats_.far_field_products = products;
-  stats_.relative_residual = kr.relative_residual;
-  stats_.seconds_krylov = seconds_since(t0);
-  if (!kr.converged) {
+  // From the iterate y: V_v = R~^{-1}(g - W_v), X = W + C^ V, F = X + R_nf V.
+  auto recover = [&](const VecX& iterate) {
+    VecX W = iterate;
+    apply_held_inverse(W);
+    VecX rv(nv);
+    for (long i = 0; i < nv; ++i) rv[i] = g[i] - W[v[std::size_t(i)]];
+    const VecX Vv = nv > 0 ? factor_.solve(rv) : VecX();
+    VecX V = c.motion, X = W;
+    for (long i = 0; i < nv; ++i) V[v[std::size_t(i)]] = Vv[i];
+    {
+      VecX Vonly = VecX::Zero(n);
+      for (long i = 0; i < nv; ++i) Vonly[v[std::size_t(i)]] = Vv[i];
+      applyC(Vonly, Cz);
+      for (long i = 0; i < nv; ++i) X[v[std::size_t(i)]] += Cz[i];
+    }
+    const VecX F = X + Rnf_ * V;
+    return unpack_solution(m_, p.flow, V, F, p.fixed);
+  };
+  auto fail = [&](const KrylovResult& kr, double asked) {
     std::ostringstream o;
     o << "accelerated SD: the Krylov solve " << describe(kr) << " after " << kr.iterations
-      << " iterations (relative residual " << kr.relative_residual << ", asked " << tol_ << ") for "
+      << " iterations (relative residual " << kr.relative_residual << ", asked " << asked << ") for "
       << config_.x.size() << " particles";
     if (near_stats_.worst_i >= 0)
       o << "; closest pair (" << near_stats_.worst_i << ", " << near_stats_.worst_j << ") at symmetric gap "
         << near_stats_.min_xi;
     throw PhysicsError(o.str());
+  };
+  auto krylov = [&](VecX& iterate, double tol) {
+    return method_ == Method::gmres ? gmres(Aused, b, iterate, tol, kMaxIterations, kRestart)
+                                    : bicgstab(Aused, b, iterate, tol, kMaxIterations);
+  };
+  VecX Y = VecX::Zero(n);
+  KrylovResult kr = krylov(Y, tol_);
+  if (!kr.converged) fail(kr, tol_);
+  HydroResult res = recover(Y);
+  int iterations = kr.iterations;
+  stats_.first_pass_iterations = kr.iterations;
+  products += kr.products;
+  // Held particles: the residual is relative to |b|, whose largest rows can be far larger than some
+  // of the solved quantities (held particles in a flow: forces ~ 6 pi mu a |u_inf| against mobile
+  // rotations ~ |grad u|; small holding forces on a wall), and the amplification from residual to
+  // error depends on the held block (measured 0.1 ... 500). The solve is therefore continued from
+  // its iterate to a tenth of the residual, the change of every solved quantity estimating the
+  // error, and again to the residual that estimate asks for, until the estimated error is below
+  // kHeldErrorTarget times the GMRES tolerance (at most kHeldPasses passes).
+  double estimate = 0.0;
+  if (std::any_of(p.fixed.begin(), p.fixed.end(), [](char f) { return f != 0; })) {
+    double eps = tol_, next = tol_ / 10.0;
+    for (int pass = 1; pass <= kHeldPasses; ++pass) {
+      next = std::max(next, kMinResidual);
+      if (next >= eps) break;
+      const HydroResult prev = res;
+      kr = krylov(Y, next);
+      if (!kr.converged) fail(kr, next);
+      iterations += kr.iterations;
+      products += kr.products;
+      if (kr.iterations == 0) {  // the residual was already below `next`: no change to measure
+        eps = next;
+        next = eps / 10.0;
+        continue;
+      }
+      res = recover(Y);
+      // error(eps) ~ alpha eps: the change is alpha (eps - next), the new error alpha next.
+      estimate = largest_relative_change(res, prev, p.fixed) * next / (eps - next);
+      eps = next;
+      if (estimate <= kHeldErrorTarget * tol_) break;
+      next = eps * kHeldErrorTarget * tol_ / estimate;
+    }
+    // The tolerance the knobs were derived from (engine/accuracy.hpp): beyond it the solve failed.
+    if (estimate > tol_ / kKrylovFactor) {
+      std::ostringstream o;
+      o << "accelerated SD with held particles: the estimated relative error " << estimate
+        << " is above the tolerance " << tol_ / kKrylovFactor << " after the refining passes (GMRES residual "
+        << kr.relative_residual << ") for " << config_.x.size() << " particles";
+      throw PhysicsError(o.str());
+    }
   }
-  // V_v = R~^{-1}(g - W_v); X = W + C^ V; F = X + R_nf V.
-  VecX rv(nv);
-  for (long i = 0; i < nv; ++i) rv[i] = g[i] - W[v[std::size_t(i)]];
-  const VecX Vv = nv > 0 ? factor_.solve(rv) : VecX();
-  VecX V = c.motion, X = W;
-  for (long i = 0; i < nv; ++i) V[v[std::size_t(i)]] = Vv[i];
-  {
-    VecX Vonly = VecX::Zero(n);
-    for (long i = 0; i < nv; ++i) Vonly[v[std::size_t(i)]] = Vv[i];
-    applyC(Vonly, Cz);
-    for (long i = 0; i < nv; ++i) X[v[std::size_t(i)]] += Cz[i];
-  }
-  const VecX F = X + Rnf_ * V;
-  HydroResult res = unpack_solution(m_, p.flow, V, F, p.fixed);
-  res.iterations = kr.iterations;
+  stats_.held_error_estimate = estimate;
+  stats_.iterations = iterations;
+  stats_.far_field_products = products;
+  stats_.relative_residual = kr.relative_residual;
+  stats_.seconds_krylov = seconds_since(t0);
+  res.iterations = iterations;
   res.regularised_pairs = near_stats_.regularised;
   return res;
+}
+
+// Largest relative change (2-norms over particles) between two solutions of one problem: the
+// mobile particles' U and Omega, the stresslets S and the held particles' forces F.
+double AcceleratedStokesianDynamics::largest_relative_change(const HydroResult& r, const HydroResult& q,
+                                                             const std::vector<char>& fixed) const {
+  double du = 0, u = 0, dw = 0, w = 0, ds = 0, s = 0, df = 0, f = 0;
+  for (std::size_t i = 0; i < r.U.size(); ++i) {
+    if (!fixed.empty() && fixed[i]) {
+      df += (r.F[i] - q.F[i]).squaredNorm();
+      f += r.F[i].squaredNorm();
+      continue;
+    }
+    du += (r.U[i] - q.U[i]).squaredNorm();
+    u += r.U[i].squaredNorm();
+    if (m_ != Moments::F) {
+      dw += (r.Omega[i] - q.Omega[i]).squaredNorm();
+      w += r.Omega[i].squaredNorm();
+    }
+  }
+  if (m_ == Moments::FTS)
+    for (std::size_t i = 0; i < r.S.size(); ++i) {
+      ds += (r.S[i] - q.S[i]).squaredNorm();
+      s += r.S[i].squaredNorm();
+    }
+  double worst = 0.0;
+  for (auto [d, v] : {std::pair{du, u}, {dw, w}, {ds, s}, {df, f}})
+    if (v > 0.0) worst = std::max(worst, std::sqrt(d / v));
+  return worst;
 }
 
 std::vector<Vec3> AcceleratedStokesianDynamics::brownian_displacement(double, double, Rng&) {

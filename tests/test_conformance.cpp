@@ -292,7 +292,7 @@ TEST_CASE("every hydrodynamic solver: constrained solves with noise terms agains
             CAPTURE(to_string(m));
             CAPTURE(tol);
             SolverSetup setup;
-            setup.knobs = derive_knobs(tol, solver.level);
+            setup.knobs = derive_knobs(tol, solver.level, 1.0, true);  // particle 1 is fixed
             setup.spec = MobilitySpec{m, mu, setup.knobs.far_field};
             if (method) setup.far_field = method->make(setup.spec);
             auto s = solver.make(std::move(setup));
@@ -354,7 +354,7 @@ TEST_CASE("every solver that samples Brownian motion: displacements of covarianc
       CAPTURE(solver.name);
       CAPTURE(to_string(m));
       SolverSetup setup;
-      setup.knobs = derive_knobs(1e-10, solver.level);
+      setup.knobs = derive_knobs(1e-10, solver.level, 1.0, false);
       setup.spec = MobilitySpec{m, mu, setup.knobs.far_field};
       if (solver.needs_far_field) setup.far_field = far_field_methods().find("direct")->make(setup.spec);
       auto s = solver.make(std::move(setup));

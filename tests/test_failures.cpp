@@ -145,6 +145,25 @@ TEST_CASE("CG: an indefinite or non-finite operator is detected at once") {
   CHECK(nf.iterations <= 1);
 }
 
+TEST_CASE("GMRES: a singular operator stagnates long before the cap; a non-finite one is detected") {
+  // The accelerated SD solve (engine/sd_accelerated.cpp) turns these into a physics error.
+  const int n = 20;
+  MatX A = spd(n, 7);
+  A.col(4).setZero();  // singular: b has a part outside the range
+  const VecX b = VecX::Ones(n);
+  VecX x;
+  const KrylovResult r = gmres(product(A), b, x, 1e-10, 2000, 10);
+  CHECK(r.status == KrylovStatus::stagnated);
+  CHECK_FALSE(r.converged);
+  CHECK(r.iterations <= 4 * n);
+  MatX B = spd(n, 8);
+  B(2, 5) = std::numeric_limits<double>::quiet_NaN();
+  VecX y;
+  const KrylovResult nf = gmres(product(B), b, y, 1e-10, 2000, 10);
+  CHECK(nf.status == KrylovStatus::non_finite);
+  CHECK(nf.iterations <= 1);
+}
+
 TEST_CASE("Lanczos: an indefinite operator is detected; a happy breakdown is exact convergence") {
   const int n = 30;
   MatX A = spd(n, 7);

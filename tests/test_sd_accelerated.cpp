@@ -152,11 +152,41 @@ std::unique_ptr<AcceleratedStokesianDynamics> accelerated(const Case& c, Moments
                                                               AcceleratedStokesianDynamics::Method::gmres,
                                                           const lubrication::NearFieldParams& near = {}) {
   const auto [amin, amax] = std::minmax_element(c.a.begin(), c.a.end());
-  const AccuracyKnobs k = derive_knobs(tol, HydroModel::stokesian, *amax / *amin);
+  const bool held = std::any_of(c.fixed.begin(), c.fixed.end(), [](char f) { return f != 0; });
+  const AccuracyKnobs k = derive_knobs(tol, HydroModel::stokesian, *amax / *amin, held);
   const MobilitySpec spec{m, mu, k.far_field};
   auto op = far_field_methods().find(c.domain.periodic() ? "pme" : "direct")->make(spec);
   return std::make_unique<AcceleratedStokesianDynamics>(std::move(op), mu, near, k.krylov,
                                                         shift, method, factor_gap);
+}
+
+// A 10 x 10 wall of held spheres (gap 0.05) under 20 mobile ones: in an open domain, or in a
+// periodic box 20.5 x 11 x 20.5 (a slit between the wall and its image).
+Case wall_case(bool periodic) {
+  Case w;
+  w.name = periodic ? "wall of 100 held in a periodic slit" : "wall of 100 held under 20 mobile";
+  for (int i = 0; i < 10; ++i)
+    for (int k = 0; k < 10; ++k) w.x.emplace_back(2.05 * i, 0.0, 2.05 * k);
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  while (w.x.size() < 120) {
+    const Vec3 p(18.45 * u(rng), 2.2 + 6.0 * u(rng), 18.45 * u(rng));
+    bool clear = true;
+    for (const Vec3& q : w.x) clear &= (p - q).norm() > 2.1;
+    if (clear) w.x.push_back(p);
+  }
+  w.a.assign(w.x.size(), 1.0);
+  w.fixed.assign(w.x.size(), 0);
+  for (std::size_t i = 0; i < 100; ++i) w.fixed[i] = 1;
+  if (periodic) {
+    w.domain.kind = Domain::Kind::periodic;
+    w.domain.box = Vec3(20.5, 11.0, 20.5);
+    bool clear = true;
+    for (std::size_t i = 0; i < w.x.size(); ++i)
+      for (std::size_t j = 0; j < i; ++j) clear &= w.domain.minimum_image(w.x[i] - w.x[j]).norm() > 2.04;
+    REQUIRE(clear);
+  }
+  return w;
 }
 
 AmbientFlow simple_shear(double rate) {
@@ -305,8 +335,10 @@ TEST_CASE("accelerated SD: the held-row preconditioner and the plain solve agree
   // over tolerances 1e-3 ... 1e-8, F / FT / FTS, 20 % and 90 % held spheres, and a wall of touching
   // held spheres under mobile ones. Each is within the tolerance of the exact answer (the GMRES
   // residual is the true one for both; the test above checks the fast path against dense SD), so
-  // they differ by at most 2 tol; the preconditioner takes no more iterations, and on the wall at
-  // least a fifth fewer. In periodic boxes it is off (engine/sd_accelerated.hpp): the same answer.
+  // they differ by at most 2 tol; the preconditioner takes no more iterations in the first pass (to
+  // the GMRES tolerance; one more allowed in periodic boxes, whose random held particles it barely
+  // helps), and on the walls fewer: a fifth fewer on the open wall. Periodic boxes (a slit between a
+  // wall and its image, a sheared suspension) use Ewald-summed blocks.
   const double mu = 1.0;
   const AmbientFlow flow = simple_shear(1.0);
   std::vector<Case> cases;
@@ -314,25 +346,8 @@ TEST_CASE("accelerated SD: the held-row preconditioner and the plain solve agree
   cases.push_back(make_case("open phi 0.2, 90 % held", 60, 0.2, false, 0.0, 0.0, 3, false, 202));
   for (long i = 0; i < 60; ++i) cases.back().fixed[std::size_t(i)] = i % 10 != 0;
   cases.push_back(make_case("sheared phi 0.3, 20 % held", 60, 0.3, true, 0.23, 0.0, 3, true, 203));
-  {
-    // A 10 x 10 wall of held spheres (gap 0.05) under 20 mobile ones (open domain).
-    Case w;
-    w.name = "wall of 100 held under 20 mobile";
-    for (int i = 0; i < 10; ++i)
-      for (int k = 0; k < 10; ++k) w.x.emplace_back(2.05 * i, 0.0, 2.05 * k);
-    std::mt19937_64 rng(5);
-    std::uniform_real_distribution<double> u(0.0, 1.0);
-    while (w.x.size() < 120) {
-      const Vec3 p(18.45 * u(rng), 2.2 + 6.0 * u(rng), 18.45 * u(rng));
-      bool clear = true;
-      for (const Vec3& q : w.x) clear &= (p - q).norm() > 2.1;
-      if (clear) w.x.push_back(p);
-    }
-    w.a.assign(w.x.size(), 1.0);
-    w.fixed.assign(w.x.size(), 0);
-    for (std::size_t i = 0; i < 100; ++i) w.fixed[i] = 1;
-    cases.push_back(w);
-  }
+  cases.push_back(wall_case(false));
+  cases.push_back(wall_case(true));
   for (const Case& c : cases) {
     const Configuration conf{c.x, c.a, c.domain};
     FlowSample sample;
@@ -349,20 +364,24 @@ TEST_CASE("accelerated SD: the held-row preconditioner and the plain solve agree
         const HydroResult rp = plain->solve(HydroProblem{conf, c.fixed, sample, F, T});
         const double e = compare(rf, rp, m, c.fixed).worst();
         MESSAGE(c.name << " " << std::string(to_string(m)) << " tol " << tol << ": difference " << e << ", iterations "
-                       << fast->stats().iterations << " (" << fast->stats().held_clusters << " blocks) against "
-                       << plain->stats().iterations);
+                       << fast->stats().first_pass_iterations << " + " << fast->stats().iterations - fast->stats().first_pass_iterations
+                       << " (" << fast->stats().held_clusters << " blocks) against "
+                       << plain->stats().first_pass_iterations << " + " << plain->stats().iterations - plain->stats().first_pass_iterations << ", estimated error " << fast->stats().held_error_estimate / tol << " / "
+                       << plain->stats().held_error_estimate / tol << " tol");
         CAPTURE(c.name);
         CAPTURE(tol);
         CHECK(plain->stats().held_clusters == 0);
-        if (c.domain.periodic()) {
-          CHECK(fast->stats().held_clusters == 0);
-          CHECK(e == 0.0);
-          continue;
-        }
         CHECK(fast->stats().held_clusters > 0);
         CHECK(e <= 2 * tol);
-        CHECK(fast->stats().iterations <= plain->stats().iterations);
-        if (c.name.rfind("wall", 0) == 0) CHECK(fast->stats().iterations <= 0.8 * plain->stats().iterations);
+        // The preconditioner's effect: the first pass, to the GMRES tolerance (the further passes
+        // depend on each solve's error estimate).
+        const int spare = c.domain.periodic() ? 1 : 0;
+        const int it_fast = fast->stats().first_pass_iterations, it_plain = plain->stats().first_pass_iterations;
+        CHECK(it_fast <= it_plain + spare);
+        if (c.name.rfind("wall", 0) == 0) {  // open: a fifth fewer; periodic: fewer (measured 5-25 %)
+          if (c.domain.periodic()) CHECK(it_fast < it_plain);
+          else CHECK(it_fast <= 0.8 * it_plain);
+        }
         // Next configurations: the mobile particles moved (the held blocks are kept), then every
         // particle moved (the blocks are redone); the same solver objects.
         for (bool move_held : {false, true}) {
@@ -378,7 +397,7 @@ TEST_CASE("accelerated SD: the held-row preconditioner and the plain solve agree
           const HydroResult rp2 = plain->solve(HydroProblem{conf2, c.fixed, sample2, F, T});
           CAPTURE(move_held);
           CHECK(compare(rf2, rp2, m, c.fixed).worst() <= 2 * tol);
-          CHECK(fast->stats().iterations <= plain->stats().iterations);
+          CHECK(fast->stats().first_pass_iterations <= plain->stats().first_pass_iterations + spare);
         }
       }
   }
@@ -404,4 +423,46 @@ TEST_CASE("accelerated SD: set-up as task-graph phases equals prepare()") {
   const HydroResult ra = a->solve(HydroProblem{conf, c.fixed, sample, F, T});
   const HydroResult rb = b->solve(HydroProblem{conf, c.fixed, sample, F, T});
   CHECK(compare(rb, ra, Moments::FTS, c.fixed).worst() == 0.0);
+}
+
+TEST_CASE("accelerated SD with held particles: achieved error against dense SD at or below the tolerance") {
+  // Held particles can make the right-hand side far larger than some solved quantities (random held
+  // spheres in shear: forces ~ 6 pi mu a |u_inf| against rotations ~ rate; small holding forces on
+  // a wall where the flow vanishes). Before the solver's error-estimated passes and the tighter far
+  // field (engine/accuracy.cpp) these cases reached 0.95 t (random, half held) and 1.4-3.2 t (the
+  // periodic slit's holding forces); at N = 1000 half held, 2.5 t (docs/accelerated_sd.md).
+  const double mu = 1.0;
+  const AmbientFlow flow = simple_shear(1.0);
+  std::vector<Case> cases;
+  cases.push_back(make_case("open phi 0.2, half of 300 held", 300, 0.2, false, 0.0, 0.0, 3, false, 911));
+  for (long i = 0; i < 300; ++i) cases.back().fixed[std::size_t(i)] = i % 2 != 0;
+  cases.push_back(make_case("periodic phi 0.2, 90 % of 300 held", 300, 0.2, true, 0.0, 0.0, 3, false, 911));
+  for (long i = 0; i < 300; ++i) cases.back().fixed[std::size_t(i)] = i % 10 != 0;
+  cases.push_back(wall_case(true));
+  for (const Case& c : cases) {
+    const Configuration conf{c.x, c.a, c.domain};
+    FlowSample sample;
+    flow.sample(c.x, sample);
+    std::vector<Vec3> F, T;
+    loads(long(c.x.size()), 5, F, T);
+    for (Moments m : {Moments::FT, Moments::FTS}) {
+      if (c.x.size() > 200 && m == Moments::FTS && c.domain.periodic()) continue;  // time (dense Ewald FTS)
+      DenseStokesianDynamics dense(m, mu, flow);
+      dense.prepare(conf);
+      const HydroResult ref = dense.solve(HydroProblem{conf, c.fixed, sample, F, T});
+      for (double tol : {1e-3, 1e-5}) {
+        auto s = accelerated(c, m, mu, tol);
+        s->prepare(conf);
+        const Errors e = compare(s->solve(HydroProblem{conf, c.fixed, sample, F, T}), ref, m, c.fixed);
+        MESSAGE(c.name << " " << std::string(to_string(m)) << " tol " << tol << ": error / tol U " << e.U / tol
+                       << ", Omega " << e.Omega / tol << ", S " << e.S / tol << ", holding forces " << e.Ffixed / tol
+                       << "; iterations " << s->stats().first_pass_iterations << " + "
+                       << s->stats().iterations - s->stats().first_pass_iterations << ", estimated error "
+                       << s->stats().held_error_estimate / tol << " tol");
+        CAPTURE(c.name);
+        CAPTURE(tol);
+        CHECK(e.worst() <= tol);
+      }
+    }
+  }
 }
