@@ -296,46 +296,64 @@ HydroResult AcceleratedStokesianDynamics::solve(const HydroProblem& p) {
         << near_stats_.min_xi;
     throw PhysicsError(o.str());
   };
-  auto krylov = [&](VecX& iterate, double tol) {
-    return method_ == Method::gmres ? gmres(Aused, b, iterate, tol, kMaxIterations, kRestart)
-                                    : bicgstab(Aused, b, iterate, tol, kMaxIterations);
-  };
   VecX Y = VecX::Zero(n);
-  KrylovResult kr = krylov(Y, tol_);
-  if (!kr.converged) fail(kr, tol_);
-  HydroResult res = recover(Y);
-  int iterations = kr.iterations;
-  stats_.first_pass_iterations = kr.iterations;
-  products += kr.products;
+  KrylovResult kr;
+  HydroResult res;
+  int iterations = 0;
+  auto run = [&](double tol, GmresSnapshot* snapshot = nullptr) {
+    kr = method_ == Method::gmres ? gmres(Aused, b, Y, tol, kMaxIterations, kRestart, snapshot)
+                                  : bicgstab(Aused, b, Y, tol, kMaxIterations);
+    if (!kr.converged) fail(kr, tol);
+    iterations += kr.iterations;
+    products += kr.products;
+  };
   // Held particles: the residual is relative to |b|, whose largest rows can be far larger than some
   // of the solved quantities (held particles in a flow: forces ~ 6 pi mu a |u_inf| against mobile
   // rotations ~ |grad u|; small holding forces on a wall), and the amplification from residual to
-  // error depends on the held block (measured 0.1 ... 500). The solve is therefore continued from
-  // its iterate to a tenth of the residual, the change of every solved quantity estimating the
-  // error, and again to the residual that estimate asks for, until the estimated error is below
-  // kHeldErrorTarget times the GMRES tolerance (at most kHeldPasses passes).
+  // error depends on the held block (measured 0.1 ... 500). The solve therefore goes on past the
+  // GMRES tolerance to a tenth of it, keeping the iterate where it passed the tolerance: the change
+  // of every solved quantity between the two estimates the error, error(eps) ~ alpha eps. It then
+  // continues to the residual that estimate asks for, until the estimated error is below
+  // kHeldErrorTarget times the GMRES tolerance (at most kHeldPasses further passes).
   double estimate = 0.0;
-  if (std::any_of(p.fixed.begin(), p.fixed.end(), [](char f) { return f != 0; })) {
-    double eps = tol_, next = tol_ / 10.0;
-    for (int pass = 1; pass <= kHeldPasses; ++pass) {
-      next = std::max(next, kMinResidual);
-      if (next >= eps) break;
-      const HydroResult prev = res;
-      kr = krylov(Y, next);
-      if (!kr.converged) fail(kr, next);
-      iterations += kr.iterations;
-      products += kr.products;
-      if (kr.iterations == 0) {  // the residual was already below `next`: no change to measure
-        eps = next;
-        next = eps / 10.0;
-        continue;
-      }
+  const bool held = std::any_of(p.fixed.begin(), p.fixed.end(), [](char f) { return f != 0; });
+  if (!held) {
+    run(tol_);
+    stats_.first_pass_iterations = iterations;
+    res = recover(Y);
+  } else {
+    HydroResult prev;
+    double eps0;
+    if (method_ == Method::gmres) {
+      GmresSnapshot snap;
+      snap.tol = tol_;
+      run(tol_ / 10.0, &snap);
+      prev = recover(snap.x);
+      eps0 = snap.relative_residual;
+      stats_.first_pass_iterations = snap.iterations;
+    } else {
+      run(tol_);
+      stats_.first_pass_iterations = iterations;
+      prev = recover(Y);
+      eps0 = kr.relative_residual;
+      run(tol_ / 10.0);
+    }
+    res = recover(Y);
+    double eps1 = kr.relative_residual;
+    // The estimate needs the residual to have fallen by at least half between the two iterates.
+    auto estimate_error = [&] {
+      return eps1 <= 0.5 * eps0 ? largest_relative_change(res, prev, p.fixed) * eps1 / (eps0 - eps1) : -1.0;
+    };
+    estimate = estimate_error();
+    for (int pass = 0; pass < kHeldPasses && !(estimate >= 0.0 && estimate <= kHeldErrorTarget * tol_); ++pass) {
+      const double next = std::max(estimate > 0.0 ? eps1 * kHeldErrorTarget * tol_ / estimate : eps1 / 10.0, kMinResidual);
+      if (next >= eps1) break;
+      prev = res;
+      eps0 = eps1;
+      run(next);
       res = recover(Y);
-      // error(eps) ~ alpha eps: the change is alpha (eps - next), the new error alpha next.
-      estimate = largest_relative_change(res, prev, p.fixed) * next / (eps - next);
-      eps = next;
-      if (estimate <= kHeldErrorTarget * tol_) break;
-      next = eps * kHeldErrorTarget * tol_ / estimate;
+      eps1 = kr.relative_residual;
+      estimate = estimate_error();
     }
     // The tolerance the knobs were derived from (engine/accuracy.hpp): beyond it the solve failed.
     if (estimate > tol_ / kKrylovFactor) {

@@ -161,6 +161,35 @@ TEST_CASE("conjugate gradients meets the requested residual") {
   }
 }
 
+TEST_CASE("GMRES meets the requested residual; its snapshot is the iterate of a run to the looser tolerance") {
+  // A nonsymmetric operator: the FTS mobility plus a skew part. The snapshot (engine/core/krylov.hpp)
+  // must be the iterate a separate run to its tolerance returns (within one cycle: the same
+  // arithmetic), with its residual at or below that tolerance; across restarts too.
+  const Config c = random_config(20, 6.0, 2);
+  MatX A = dense_mobility(c.x, c.a, 1.0, Moments::FTS);
+  const MatX K = MatX::Random(A.rows(), A.cols());
+  A += 0.01 * (K - K.transpose());
+  const VecX b = VecX::LinSpaced(A.rows(), -1.0, 1.0);
+  LinearOperator op = [&](const VecX& in, VecX& out) { out = A * in; };
+  for (int restart : {200, 7})
+    for (double tol : {1e-3, 1e-6}) {
+      CAPTURE(restart);
+      CAPTURE(tol);
+      VecX x = VecX::Zero(b.size()), y = VecX::Zero(b.size());
+      GmresSnapshot snap;
+      snap.tol = tol;
+      const KrylovResult r = gmres(op, b, x, tol * 1e-3, 2000, restart, &snap);
+      CHECK(r.converged);
+      CHECK((b - A * x).norm() <= tol * 1e-3 * b.norm() * (1 + 1e-6));
+      REQUIRE(snap.taken);
+      CHECK((b - A * snap.x).norm() <= tol * b.norm() * (1 + 1e-6));
+      CHECK(snap.iterations < r.iterations);
+      const KrylovResult q = gmres(op, b, y, tol, 2000, restart);
+      CHECK(q.iterations == snap.iterations);
+      CHECK((y - snap.x).norm() <= 1e-12 * y.norm());
+    }
+}
+
 TEST_CASE("free-draining Brownian displacements have variance 2 D dt (seeded, 5-sigma bound)") {
   // Sample variance of n = 3 * 20000 normal draws has relative standard error sqrt(2/n) ~ 0.0058;
   // 5 sigma = 0.029 makes a false failure essentially impossible for this fixed seed and any other.

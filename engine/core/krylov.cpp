@@ -180,7 +180,8 @@ KrylovResult lanczos_power(const LinearOperator& A, const VecX& z, VecX& y, doub
 
 namespace stokesian {
 
-KrylovResult gmres(const LinearOperator& A, const VecX& b, VecX& x, double tol, int max_iter, int restart) {
+KrylovResult gmres(const LinearOperator& A, const VecX& b, VecX& x, double tol, int max_iter, int restart,
+                   GmresSnapshot* snapshot) {
   KrylovResult res;
   const long n = b.size();
   if (x.size() != n) x.setZero(n);
@@ -210,8 +211,25 @@ KrylovResult gmres(const LinearOperator& A, const VecX& b, VecX& x, double tol, 
   }
   double rnorm = r.norm();
   double cycle_start = rnorm;
+  // x + V_m y with H_m y = g (upper triangular): the iterate of the cycle after m steps.
+  auto iterate = [&](int m, VecX& out) {
+    VecX y = g.head(m);
+    for (int i = m - 1; i >= 0; --i) {
+      for (int j = i + 1; j < m; ++j) y[i] -= H(i, j) * y[j];
+      y[i] /= H(i, i);
+    }
+    out = x;
+    for (int i = 0; i < m; ++i) out += y[i] * V[std::size_t(i)];
+  };
+  auto take = [&](const VecX& at, double residual) {
+    snapshot->x = at;
+    snapshot->relative_residual = residual / bnorm;
+    snapshot->iterations = res.iterations;
+    snapshot->taken = true;
+  };
   for (;;) {
     if (!std::isfinite(rnorm)) return stop(KrylovStatus::non_finite, rnorm);
+    if (snapshot && !snapshot->taken && rnorm <= snapshot->tol * bnorm) take(x, rnorm);
     if (rnorm <= tol * bnorm) return stop(KrylovStatus::converged, rnorm / bnorm);
     if (res.iterations >= max_iter) return stop(KrylovStatus::max_iterations, rnorm / bnorm);
     V[0] = r / rnorm;
@@ -248,15 +266,18 @@ KrylovResult gmres(const LinearOperator& A, const VecX& b, VecX& x, double tol, 
       est = std::abs(g[m + 1]);
       ++m;
       if (hn > 0.0) V[std::size_t(m)] = w / hn;
+      if (snapshot && !snapshot->taken && est <= snapshot->tol * bnorm) {
+        VecX at;
+        iterate(m, at);
+        take(at, est);
+      }
       if (est <= tol * bnorm || hn == 0.0) break;  // converged, or an invariant Krylov space (exact)
     }
-    // x += V_m y, with H_m y = g (upper triangular).
-    VecX y = g.head(m);
-    for (int i = m - 1; i >= 0; --i) {
-      for (int j = i + 1; j < m; ++j) y[i] -= H(i, j) * y[j];
-      y[i] /= H(i, i);
+    {
+      VecX next;
+      iterate(m, next);
+      x = std::move(next);
     }
-    for (int i = 0; i < m; ++i) x += y[i] * V[std::size_t(i)];
     H.setZero();
     if (est <= tol * bnorm && res.iterations <= m) {
       // Converged inside the first cycle: the least-squares residual is the residual of x (Arnoldi

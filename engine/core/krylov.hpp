@@ -12,7 +12,8 @@
 // gmres: restarted GMRES(m) for a general (nonsymmetric) A (Saad & Schultz 1986): the iterate of
 //   least residual norm over the Krylov space, Arnoldi with modified Gram-Schmidt and one
 //   reorthogonalisation pass, Givens rotations for the small least-squares problem; restarted
-//   every `restart` iterations from the true residual. Stops when |b - A x| <= tol |b|.
+//   every `restart` iterations from the true residual. Stops when |b - A x| <= tol |b|; can keep
+//   the iterate where the residual first reaches a looser tolerance (GmresSnapshot).
 // bicgstab: van der Vorst's (1992) BiCGStab, two products per iteration and short recurrences;
 //   kept as the alternative the accelerated SD solver was measured against (bench_asd).
 //
@@ -65,7 +66,18 @@ constexpr int kStagnationWindow = 200;
 
 KrylovResult conjugate_gradient(const LinearOperator& A, const VecX& b, VecX& x, double tol, int max_iter);
 
-KrylovResult gmres(const LinearOperator& A, const VecX& b, VecX& x, double tol, int max_iter, int restart = 40);
+// The iterate at an intermediate tolerance of the same GMRES run: taken the first time the
+// residual is at or below tol |b| (x, its relative residual and the iterations so far).
+struct GmresSnapshot {
+  double tol = 0.0;
+  bool taken = false;
+  VecX x;
+  double relative_residual = 0.0;
+  int iterations = 0;
+};
+
+KrylovResult gmres(const LinearOperator& A, const VecX& b, VecX& x, double tol, int max_iter, int restart = 40,
+                   GmresSnapshot* snapshot = nullptr);
 
 KrylovResult bicgstab(const LinearOperator& A, const VecX& b, VecX& x, double tol, int max_iter);
 
