@@ -230,6 +230,10 @@ ResolvedModel resolve_model(const Scene& s) {
                             ", bench_asd/bench_dense_sd; set solver = \"dense\" or \"accelerated\" to choose)");
       else
         m.reasons.push_back("solver set by scene: " + s.hydro.solver);
+      if (m.fixed_particles)
+        m.reasons.push_back("held particles: far-field products asked a tenth of the usual tolerance and, in the "
+                            "accelerated solver, GMRES continued until its error estimate meets the tolerance "
+                            "(engine/accuracy.cpp, docs/accelerated_sd.md)");
     } else if (s.hydro.lubrication != Lubrication::exact) {
       m.reasons.push_back(std::string("note: lubrication = \"") + name_of(s.hydro.lubrication) +
                           "\" applies to the stokesian level only; the level here is " + name_of(m.level));
