@@ -130,6 +130,8 @@ class AcceleratedStokesianDynamics final : public HydroSolver {
   static constexpr double kHeldErrorTarget = 1.0;
   static constexpr int kHeldPasses = 3;
   static constexpr double kMinResidual = 1e-13;
+  // A solved quantity below this fraction of the largest (row-scaled norms) is held to that fraction.
+  static constexpr double kNegligibleBlock = 1e-3;
 
  private:
   void factorise(const std::vector<long>& v);
