@@ -328,6 +328,11 @@ HydroResult AcceleratedStokesianDynamics::solve(const HydroProblem& p) {
       GmresSnapshot snap;
       snap.tol = tol_;
       run(tol_ / 10.0, &snap);
+      if (!snap.taken) {  // b = 0: converged at once, nothing to compare
+        snap.x = Y;
+        snap.relative_residual = kr.relative_residual;
+        snap.iterations = kr.iterations;
+      }
       prev = recover(snap.x);
       eps0 = snap.relative_residual;
       stats_.first_pass_iterations = snap.iterations;

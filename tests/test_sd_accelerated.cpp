@@ -465,6 +465,14 @@ TEST_CASE("accelerated SD: a sphere pushed along a periodic slit's midplane, its
       }
     }
   }
+  // No load and no flow: the right-hand side is zero, and so is the answer.
+  const std::vector<Vec3> none(c.x.size(), Vec3::Zero());
+  auto s = accelerated(c, Moments::FTS, mu, 1e-4);
+  s->prepare(conf);
+  HydroResult r;
+  REQUIRE_NOTHROW(r = s->solve(HydroProblem{conf, c.fixed, sample, none, none}));
+  CHECK(r.U.back().norm() == 0.0);
+  CHECK(s->stats().iterations == 0);
 }
 
 TEST_CASE("accelerated SD with held particles: achieved error against dense SD at or below the tolerance") {
