@@ -4,6 +4,7 @@
 #include "engine/core/errors.hpp"
 #include "engine/core/channel.hpp"
 #include "engine/core/flow.hpp"
+#include "engine/core/layout.hpp"
 #include "engine/methods.hpp"
 #include "engine/pair_forces.hpp"
 #include "lubrication/cutoff.hpp"
@@ -163,7 +164,7 @@ ResolvedModel resolve_model(const Scene& s) {
   const std::shared_ptr<const AmbientField> field = make_ambient_field(s.flow, s.walls, s.domain);
   const AmbientField& flow = *field;
   m.brownian = s.fluid.kT > 0.0;
-  m.fixed_particles = std::any_of(s.fixed.begin(), s.fixed.end(), [](char c) { return c != 0; });
+  m.fixed_particles = any_fixed(s.fixed);
   m.reasons.push_back(m.brownian ? "fluid.kT > 0: Brownian motion on" : "fluid.kT = 0: athermal");
   if (s.inflow.enabled)
     m.reasons.push_back("[inflow]: up to N = " + std::to_string(n) + " particles at once (capacity " +

@@ -316,7 +316,7 @@ HydroResult AcceleratedStokesianDynamics::solve(const HydroProblem& p) {
   // continues to the residual that estimate asks for, until the estimated error is below
   // kHeldErrorTarget times the GMRES tolerance (at most kHeldPasses further passes).
   double estimate = 0.0;
-  const bool held = std::any_of(p.fixed.begin(), p.fixed.end(), [](char f) { return f != 0; });
+  const bool held = any_fixed(p.fixed);
   if (!held) {
     run(tol_);
     stats_.first_pass_iterations = iterations;

@@ -62,8 +62,7 @@ Config chain(bool periodic, bool with_fixed) {
 }
 
 std::unique_ptr<AcceleratedStokesianDynamics> accelerated(const Config& c, Moments m, double tol) {
-  const bool held = std::any_of(c.fixed.begin(), c.fixed.end(), [](char f) { return f != 0; });
-  const AccuracyKnobs k = derive_knobs(tol, HydroModel::stokesian, 1.6 / 0.7, held);
+  const AccuracyKnobs k = derive_knobs(tol, HydroModel::stokesian, 1.6 / 0.7, any_fixed(c.fixed));
   auto op = far_field_methods().find(c.domain.periodic() ? "ewald" : "direct")->make(MobilitySpec{m, 1.0, k.far_field});
   return std::make_unique<AcceleratedStokesianDynamics>(std::move(op), 1.0, lubrication::NearFieldParams{}, k.krylov,
                                                         AcceleratedStokesianDynamics::kShift,

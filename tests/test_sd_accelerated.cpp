@@ -152,12 +152,30 @@ std::unique_ptr<AcceleratedStokesianDynamics> accelerated(const Case& c, Moments
                                                               AcceleratedStokesianDynamics::Method::gmres,
                                                           const lubrication::NearFieldParams& near = {}) {
   const auto [amin, amax] = std::minmax_element(c.a.begin(), c.a.end());
-  const bool held = std::any_of(c.fixed.begin(), c.fixed.end(), [](char f) { return f != 0; });
-  const AccuracyKnobs k = derive_knobs(tol, HydroModel::stokesian, *amax / *amin, held);
+  const AccuracyKnobs k = derive_knobs(tol, HydroModel::stokesian, *amax / *amin, any_fixed(c.fixed));
   const MobilitySpec spec{m, mu, k.far_field};
   auto op = far_field_methods().find(c.domain.periodic() ? "pme" : "direct")->make(spec);
   return std::make_unique<AcceleratedStokesianDynamics>(std::move(op), mu, near, k.krylov,
                                                         shift, method, factor_gap);
+}
+
+// Every particle held but each k-th (k = 10: 90 % held; k = 2: half).
+Case holding_all_but_every(Case c, long k) {
+  for (std::size_t i = 0; i < c.fixed.size(); ++i) c.fixed[i] = long(i) % k != 0;
+  return c;
+}
+
+// A case's problem: its configuration, the ambient flow at its centres, random unit loads.
+struct Loaded {
+  Configuration conf;
+  FlowSample sample;
+  std::vector<Vec3> F, T;
+};
+Loaded loaded(const Case& c, const AmbientFlow& flow, std::uint64_t seed) {
+  Loaded l{{c.x, c.a, c.domain}, {}, {}, {}};
+  flow.sample(c.x, l.sample);
+  loads(long(c.x.size()), seed, l.F, l.T);
+  return l;
 }
 
 // A 10 x 10 wall of held spheres (gap 0.05) under 20 mobile ones: in an open domain, or in a
@@ -343,25 +361,22 @@ TEST_CASE("accelerated SD: the held-row preconditioner and the plain solve agree
   const AmbientFlow flow = simple_shear(1.0);
   std::vector<Case> cases;
   cases.push_back(make_case("open phi 0.3, 20 % held", 60, 0.3, false, 0.0, 0.0, 4, true, 201));
-  cases.push_back(make_case("open phi 0.2, 90 % held", 60, 0.2, false, 0.0, 0.0, 3, false, 202));
-  for (long i = 0; i < 60; ++i) cases.back().fixed[std::size_t(i)] = i % 10 != 0;
+  cases.push_back(holding_all_but_every(make_case("open phi 0.2, 90 % held", 60, 0.2, false, 0.0, 0.0, 3, false, 202), 10));
   cases.push_back(make_case("sheared phi 0.3, 20 % held", 60, 0.3, true, 0.23, 0.0, 3, true, 203));
   cases.push_back(wall_case(false));
   cases.push_back(wall_case(true));
   for (const Case& c : cases) {
-    const Configuration conf{c.x, c.a, c.domain};
-    FlowSample sample;
-    flow.sample(c.x, sample);
-    std::vector<Vec3> F, T;
-    loads(long(c.x.size()), 11, F, T);
+    const Loaded l = loaded(c, flow, 11);
+    const Configuration& conf = l.conf;
+    const HydroProblem problem{conf, c.fixed, l.sample, l.F, l.T};
     for (Moments m : {Moments::F, Moments::FT, Moments::FTS})
       for (double tol : {1e-3, 1e-5, 1e-8}) {
         auto fast = accelerated(c, m, mu, tol), plain = accelerated(c, m, mu, tol);
         plain->set_held_preconditioner(false);
         fast->prepare(conf);
         plain->prepare(conf);
-        const HydroResult rf = fast->solve(HydroProblem{conf, c.fixed, sample, F, T});
-        const HydroResult rp = plain->solve(HydroProblem{conf, c.fixed, sample, F, T});
+        const HydroResult rf = fast->solve(problem);
+        const HydroResult rp = plain->solve(problem);
         const double e = compare(rf, rp, m, c.fixed).worst();
         MESSAGE(c.name << " " << std::string(to_string(m)) << " tol " << tol << ": difference " << e << ", iterations "
                        << fast->stats().first_pass_iterations << " + " << fast->stats().iterations - fast->stats().first_pass_iterations
@@ -393,8 +408,8 @@ TEST_CASE("accelerated SD: the held-row preconditioner and the plain solve agree
           flow.sample(x2, sample2);
           fast->prepare(conf2);
           plain->prepare(conf2);
-          const HydroResult rf2 = fast->solve(HydroProblem{conf2, c.fixed, sample2, F, T});
-          const HydroResult rp2 = plain->solve(HydroProblem{conf2, c.fixed, sample2, F, T});
+          const HydroResult rf2 = fast->solve(HydroProblem{conf2, c.fixed, sample2, l.F, l.T});
+          const HydroResult rp2 = plain->solve(HydroProblem{conf2, c.fixed, sample2, l.F, l.T});
           CAPTURE(move_held);
           CHECK(compare(rf2, rp2, m, c.fixed).worst() <= 2 * tol);
           CHECK(fast->stats().first_pass_iterations <= plain->stats().first_pass_iterations + spare);
@@ -484,26 +499,22 @@ TEST_CASE("accelerated SD with held particles: achieved error against dense SD a
   const double mu = 1.0;
   const AmbientFlow flow = simple_shear(1.0);
   std::vector<Case> cases;
-  cases.push_back(make_case("open phi 0.2, half of 300 held", 300, 0.2, false, 0.0, 0.0, 3, false, 911));
-  for (long i = 0; i < 300; ++i) cases.back().fixed[std::size_t(i)] = i % 2 != 0;
-  cases.push_back(make_case("periodic phi 0.2, 90 % of 300 held", 300, 0.2, true, 0.0, 0.0, 3, false, 911));
-  for (long i = 0; i < 300; ++i) cases.back().fixed[std::size_t(i)] = i % 10 != 0;
+  cases.push_back(holding_all_but_every(make_case("open phi 0.2, half of 300 held", 300, 0.2, false, 0.0, 0.0, 3, false, 911), 2));
+  cases.push_back(holding_all_but_every(make_case("periodic phi 0.2, 90 % of 300 held", 300, 0.2, true, 0.0, 0.0, 3, false, 911), 10));
   cases.push_back(wall_case(true));
   for (const Case& c : cases) {
-    const Configuration conf{c.x, c.a, c.domain};
-    FlowSample sample;
-    flow.sample(c.x, sample);
-    std::vector<Vec3> F, T;
-    loads(long(c.x.size()), 5, F, T);
+    const Loaded l = loaded(c, flow, 5);
+    const Configuration& conf = l.conf;
+    const HydroProblem problem{conf, c.fixed, l.sample, l.F, l.T};
     for (Moments m : {Moments::FT, Moments::FTS}) {
       if (c.x.size() > 200 && m == Moments::FTS && c.domain.periodic()) continue;  // time (dense Ewald FTS)
       DenseStokesianDynamics dense(m, mu, flow);
       dense.prepare(conf);
-      const HydroResult ref = dense.solve(HydroProblem{conf, c.fixed, sample, F, T});
+      const HydroResult ref = dense.solve(problem);
       for (double tol : {1e-3, 1e-5}) {
         auto s = accelerated(c, m, mu, tol);
         s->prepare(conf);
-        const Errors e = compare(s->solve(HydroProblem{conf, c.fixed, sample, F, T}), ref, m, c.fixed);
+        const Errors e = compare(s->solve(problem), ref, m, c.fixed);
         MESSAGE(c.name << " " << std::string(to_string(m)) << " tol " << tol << ": error / tol U " << e.U / tol
                        << ", Omega " << e.Omega / tol << ", S " << e.S / tol << ", holding forces " << e.Ffixed / tol
                        << "; iterations " << s->stats().first_pass_iterations << " + "

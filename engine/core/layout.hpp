@@ -17,6 +17,13 @@
 
 namespace stokesian {
 
+// Whether any particle is held fixed (fixed: empty or one flag per particle).
+inline bool any_fixed(const std::vector<char>& fixed) {
+  for (char f : fixed)
+    if (f != 0) return true;
+  return false;
+}
+
 struct RigidConstraints {
   Moments moments = Moments::F;
   long n = 0;
