@@ -34,8 +34,10 @@ class Dynamics {
   // Lees-Edwards strain of sheared boxes).
   virtual Evaluation evaluate(const State& s, const std::vector<Vec3>& x, double t) = 0;
   // The same with the Brownian force xi (from brownian_force) added to the given loads: the
-  // solve is R V = f + xi (engine/hydro_solver.hpp); noise == nullptr or empty: none.
-  virtual Evaluation evaluate(const State& s, const std::vector<Vec3>& x, double t, const VecX* noise) = 0;
+  // solve is R V = f + xi (engine/hydro_solver.hpp); noise == nullptr or empty: none. warm: the
+  // iterative solver's warm start (engine/hydro_solver.hpp), shared by the stages of one step.
+  virtual Evaluation evaluate(const State& s, const std::vector<Vec3>& x, double t, const VecX* noise,
+                              WarmStart* warm = nullptr) = 0;
   // Displacement of Brownian motion without drift at the positions of s: sqrt(2 kT dt) M^{1/2} W
   // for the far field, dt R^{-1} xi for solvers with a resistance (zero for fixed particles);
   // empty when athermal.
@@ -45,7 +47,8 @@ class Dynamics {
   virtual VecX brownian_force(const State& s, double dt, Rng& rng) = 0;
   // The response to the force xi alone (no other loads, no ambient flow) at positions x and time t
   // into the step of s: U = R^{-1} xi and the stresslets A xi, A = dS/dF (engine/stress.hpp).
-  virtual HydroResult noise_response(const State& s, const std::vector<Vec3>& x, double t, const VecX& xi) = 0;
+  virtual HydroResult noise_response(const State& s, const std::vector<Vec3>& x, double t, const VecX& xi,
+                                     WarmStart* warm = nullptr) = 0;
 };
 
 }  // namespace stokesian

@@ -46,6 +46,7 @@ struct HydroProblem {
   const std::vector<Vec3>& torque;  // idem torque (ignored at F level; may be empty)
   const VecX* force_noise = nullptr;  // f_B, generalised layout (nullptr: none)
   const VecX* slip = nullptr;         // u_s, generalised layout (nullptr: none)
+  WarmStart* warm = nullptr;          // initial iterate in, final iterate out (nullptr: start from zero)
 };
 
 class HydroSolver {

@@ -42,10 +42,10 @@ std::vector<PreparePhase> Hydrodynamics::prepare_phases(const Configuration& c) 
 }
 
 HydroResult Hydrodynamics::solve(const Configuration& c, const std::vector<char>& fixed, const std::vector<Vec3>& F,
-                                 const std::vector<Vec3>& T, const VecX* noise) {
+                                 const std::vector<Vec3>& T, const VecX* noise, WarmStart* warm) {
   FlowSample sample;
   flow_->sample(c.x, sample);
-  return solver_->solve(HydroProblem{c, fixed, sample, F, T, noise && noise->size() ? noise : nullptr});
+  return solver_->solve(HydroProblem{c, fixed, sample, F, T, noise && noise->size() ? noise : nullptr, nullptr, warm});
 }
 
 VecX Hydrodynamics::brownian_force(const Configuration& c, const std::vector<char>& fixed, double kT, double dt,
@@ -54,12 +54,13 @@ VecX Hydrodynamics::brownian_force(const Configuration& c, const std::vector<cha
   return solver_->brownian_force(kT, dt, fixed, rng);
 }
 
-HydroResult Hydrodynamics::noise_velocity(const Configuration& c, const std::vector<char>& fixed, const VecX& xi) {
+HydroResult Hydrodynamics::noise_velocity(const Configuration& c, const std::vector<char>& fixed, const VecX& xi,
+                                          WarmStart* warm) {
   const std::size_t n = c.x.size();
   FlowSample still;
   AmbientFlow{}.sample(c.x, still);
   const std::vector<Vec3> zero(n, Vec3::Zero());
-  return solver_->solve(HydroProblem{c, fixed, still, zero, zero, &xi});
+  return solver_->solve(HydroProblem{c, fixed, still, zero, zero, &xi, nullptr, warm});
 }
 
 HydroResult Hydrodynamics::solve(const std::vector<Vec3>& x, const std::vector<double>& a,

@@ -27,14 +27,16 @@ class Hydrodynamics {
   // The same as phases for the step's task graph (none when c is the prepared configuration); the
   // last phase marks c prepared.
   std::vector<PreparePhase> prepare_phases(const Configuration& c);
-  // At the prepared configuration; noise: a Brownian force added to the given loads (or nullptr).
+  // At the prepared configuration; noise: a Brownian force added to the given loads (or nullptr);
+  // warm: an iterative solver's warm start (engine/hydro_solver.hpp), or nullptr.
   HydroResult solve(const Configuration& c, const std::vector<char>& fixed, const std::vector<Vec3>& F,
-                    const std::vector<Vec3>& T, const VecX* noise = nullptr);
+                    const std::vector<Vec3>& T, const VecX* noise = nullptr, WarmStart* warm = nullptr);
   // prepare + the solver's Brownian force, covariance (2 kT / dt) R (engine/brownian.hpp).
   VecX brownian_force(const Configuration& c, const std::vector<char>& fixed, double kT, double dt, Rng& rng);
   // At the prepared configuration: the velocities that the force xi alone gives (no loads, no
   // ambient flow).
-  HydroResult noise_velocity(const Configuration& c, const std::vector<char>& fixed, const VecX& xi);
+  HydroResult noise_velocity(const Configuration& c, const std::vector<char>& fixed, const VecX& xi,
+                             WarmStart* warm = nullptr);
 
   // prepare + solve. F, T: non-hydrodynamic force and torque on each particle (T ignored at F level).
   HydroResult solve(const std::vector<Vec3>& x, const std::vector<double>& a, const std::vector<char>& fixed,

@@ -98,20 +98,27 @@ StepResult FixmanIntegrator::step(const State& s, const Evaluation& start, Dynam
     const std::vector<Vec3> xmid = axpy(s.position, 0.5 * dt, start.hydro.U);
     return StepResult{axpy(s.position, dt, d.evaluate(s, xmid, 0.5 * dt).hydro.U), dt, dt, {}};
   }
-  const HydroResult h0 = d.evaluate(s, s.position, 0.0, &xi).hydro;
-  // Brownian stresslet (engine/stress.hpp): (A(x') - A(x0)) xi, A = dS/dF = R_SU R_FU^{-1} (S the
-  // stresslets exerted on the fluid), whose mean by the expansion above is kT d_k A_{.k} = -S^B.
-  // The responses to xi alone are solved for at each stage right after its solve (the set-up is
-  // kept): the stages' stresslets also hold A F + B E_inf, whose change over the step is O(dt) on
-  // average only while sqrt(kT dt R^{-1}) is small against the scale of F; a stiff contact
-  // repulsion (F ~ F0/h) makes that change dominate. Two solves more on the steps that sample.
-  const bool sample = !h0.S.empty() && start.sample_brownian_stress;
-  const HydroResult a0 = sample ? d.noise_response(s, s.position, 0.0, xi) : HydroResult{};
+  // Brownian stresslet (engine/stress.hpp): (A(x') - A(x0)) xi, A = dS/dF (S the stresslets exerted
+  // on the fluid), whose mean by the expansion above is kT d_k A_{.k} = -S^B. The responses to xi
+  // alone are solved for at each stage right after its solve (the set-up is kept): the stages'
+  // stresslets also hold A F + B E_inf, whose change over the step is O(dt) on average only while
+  // sqrt(kT dt R^{-1}) is small against the scale of F; a stiff contact repulsion (F ~ F0/h) makes
+  // that change dominate. Two solves more on the steps that sample.
+  // Warm starts (engine/core/layout.hpp, WarmStart): the midpoint solve starts from the iterate of
+  // the solve at x0, and the responses to xi alone from that iterate (the full solve is the response
+  // to xi plus the deterministic one, so at low Peclet numbers it is most of the answer) and then
+  // from each other. The full solves are the same whether or not the step samples, so sampling
+  // leaves the trajectory unchanged; iterative solvers start from zero again at the next step.
+  const bool sample = start.sample_brownian_stress;  // FTS in periodic boxes only (resolve_model)
+  WarmStart full;
+  const HydroResult h0 = d.evaluate(s, s.position, 0.0, &xi, &full).hydro;
+  WarmStart noise = full;
+  const HydroResult a0 = sample ? d.noise_response(s, s.position, 0.0, xi, &noise) : HydroResult{};
   const std::vector<Vec3> xmid = axpy(s.position, 0.5 * dt, h0.U);
-  const HydroResult h1 = d.evaluate(s, xmid, 0.5 * dt, &xi).hydro;
+  const HydroResult h1 = d.evaluate(s, xmid, 0.5 * dt, &xi, &full).hydro;
   StepResult r{axpy(s.position, dt, h1.U), dt, dt, {}};
   if (sample) {
-    const HydroResult a1 = d.noise_response(s, xmid, 0.5 * dt, xi);
+    const HydroResult a1 = d.noise_response(s, xmid, 0.5 * dt, xi, &noise);
     Mat3 sum = Mat3::Zero();
     for (std::size_t i = 0; i < a0.S.size(); ++i) sum += from_vec5(a1.S[i]) - from_vec5(a0.S[i]);
     r.brownian_stresslet = sum;

@@ -296,7 +296,11 @@ HydroResult AcceleratedStokesianDynamics::solve(const HydroProblem& p) {
         << near_stats_.min_xi;
     throw PhysicsError(o.str());
   };
-  VecX Y = VecX::Zero(n);
+  // Warm start (engine/core/layout.hpp): the caller's iterate of a related solve, without held
+  // particles (their error-estimated passes compare iterates of one run from zero).
+  const bool held = any_fixed(p.fixed);
+  const bool warm = p.warm && !held && method_ == Method::gmres && p.warm->iterate.size() == n;
+  VecX Y = warm ? p.warm->iterate : VecX::Zero(n);
   KrylovResult kr;
   HydroResult res;
   int iterations = 0;
@@ -316,7 +320,6 @@ HydroResult AcceleratedStokesianDynamics::solve(const HydroProblem& p) {
   // continues to the residual that estimate asks for, until the estimated error is below
   // kHeldErrorTarget times the GMRES tolerance (at most kHeldPasses further passes).
   double estimate = 0.0;
-  const bool held = any_fixed(p.fixed);
   if (!held) {
     run(tol_);
     stats_.first_pass_iterations = iterations;
@@ -377,6 +380,7 @@ HydroResult AcceleratedStokesianDynamics::solve(const HydroProblem& p) {
   stats_.seconds_krylov = seconds_since(t0);
   res.iterations = iterations;
   res.regularised_pairs = near_stats_.regularised;
+  if (p.warm) p.warm->iterate = held ? VecX() : Y;
   return res;
 }
 

@@ -55,6 +55,10 @@
 // first pass the solve continues to a tenth of the residual, and takes the change of every solved
 // quantity as the estimate of its error, until that is below kHeldErrorTarget (solve()).
 //
+// Warm start: HydroProblem::warm (engine/core/layout.hpp) gives GMRES its initial W (the Fixman step
+// passes the iterate of the same kind of solve at x0 to the midpoint solve); not used with held
+// particles. Measured in bench_brownian (docs/benchmarks.md, "Brownian SD step cost").
+//
 // Fixed particles change the index set v; the factor of R~ is kept for the set of the last solve
 // (prepare() factorises for the set last used, solve() refactorises when the set changes).
 #include "engine/core/krylov.hpp"

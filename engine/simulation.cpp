@@ -89,12 +89,13 @@ Evaluation Simulation::evaluate(const State& s, const std::vector<Vec3>& x, doub
   return evaluate_checked(s, x, t, diagnostics, nullptr);
 }
 
-Evaluation Simulation::evaluate(const State& s, const std::vector<Vec3>& x, double t, const VecX* noise) {
-  return evaluate_checked(s, x, t, false, nullptr, noise);
+Evaluation Simulation::evaluate(const State& s, const std::vector<Vec3>& x, double t, const VecX* noise,
+                                WarmStart* warm) {
+  return evaluate_checked(s, x, t, false, nullptr, noise, true, warm);
 }
 
 Evaluation Simulation::evaluate_checked(const State& s, const std::vector<Vec3>& x, double t, bool diagnostics,
-                                        GapSurvey* overlaps, const VecX* noise, bool solve) {
+                                        GapSurvey* overlaps, const VecX* noise, bool solve, WarmStart* warm) {
   // Where this evaluation is, for messages: the state of a step, or an integrator stage within it.
   auto at = [&] {
     std::ostringstream o;
@@ -179,7 +180,7 @@ Evaluation Simulation::evaluate_checked(const State& s, const std::vector<Vec3>&
 
   const auto t0 = std::chrono::steady_clock::now();
   try {
-    if (solve) ev.hydro = hydro_.solve(c, s.fixed, ev.force, ev.torque, noise);
+    if (solve) ev.hydro = hydro_.solve(c, s.fixed, ev.force, ev.torque, noise, warm);
     if (solve) keep_in_plane(ev.hydro);
   } catch (const PhysicsError& e) {
     throw PhysicsError(at() + ": " + e.what() + closest_pairs(x, s.radius, domain));
@@ -210,12 +211,13 @@ VecX Simulation::brownian_force(const State& s, double dt, Rng& rng) {
   }
 }
 
-HydroResult Simulation::noise_response(const State& s, const std::vector<Vec3>& x, double t, const VecX& xi) {
+HydroResult Simulation::noise_response(const State& s, const std::vector<Vec3>& x, double t, const VecX& xi,
+                                       WarmStart* warm) {
   const Domain domain = strain_rate_ == 0.0 || t == 0.0 ? s.domain : s.domain.strained_by(strain_rate_ * t);
   const Configuration c{x, s.radius, domain};
   try {
     hydro_.prepare(c);  // the stage's set-up, kept from its evaluation
-    HydroResult r = hydro_.noise_velocity(c, s.fixed, xi);
+    HydroResult r = hydro_.noise_velocity(c, s.fixed, xi, warm);
     keep_in_plane(r);
     return r;
   } catch (const PhysicsError& e) {

@@ -48,10 +48,12 @@ class Simulation final : public Dynamics {
     return evaluate(s, x, t, false);
   }
   Evaluation evaluate(const State& s, const std::vector<Vec3>& x, double t, bool diagnostics);
-  Evaluation evaluate(const State& s, const std::vector<Vec3>& x, double t, const VecX* noise) override;
+  Evaluation evaluate(const State& s, const std::vector<Vec3>& x, double t, const VecX* noise,
+                      WarmStart* warm = nullptr) override;
   std::vector<Vec3> brownian_displacement(const State& s, double dt, Rng& rng) override;
   VecX brownian_force(const State& s, double dt, Rng& rng) override;
-  HydroResult noise_response(const State& s, const std::vector<Vec3>& x, double t, const VecX& xi) override;
+  HydroResult noise_response(const State& s, const std::vector<Vec3>& x, double t, const VecX& xi,
+                             WarmStart* warm = nullptr) override;
 
   Frame frame(const State& s, const Evaluation& ev) const;
   const Inflow* inflow() const { return inflow_ ? &*inflow_ : nullptr; }
@@ -92,7 +94,8 @@ class Simulation final : public Dynamics {
   // evaluate(), plus (overlaps != nullptr) the overlapping pairs of x, checked against
   // [run] max_overlap before the solve; every failure is a PhysicsError naming step and particles.
   Evaluation evaluate_checked(const State& s, const std::vector<Vec3>& x, double t, bool diagnostics,
-                              GapSurvey* overlaps, const VecX* noise = nullptr, bool solve = true);
+                              GapSurvey* overlaps, const VecX* noise = nullptr, bool solve = true,
+                              WarmStart* warm = nullptr);
   Scene scene_;
   ResolvedModel model_;
   double strain_rate_;  // d(Lees-Edwards strain)/dt of the box

@@ -418,6 +418,86 @@ TEST_CASE("accelerated SD: the held-row preconditioner and the plain solve agree
   }
 }
 
+TEST_CASE("accelerated SD: a warm start meets the tolerance against dense SD and saves iterations; a bad one "
+          "costs one product") {
+  // The Fixman step's midpoint solve starts from the iterate of its solve at x0 (HydroProblem::warm).
+  // Here: solve at x0, move every sphere along its velocity by at most 0.4 of the smallest gap, and
+  // solve there cold and warm; both against dense SD at the moved positions.
+  const double mu = 1.0;
+  const AmbientFlow flow = simple_shear(1.0);
+  struct Spec {
+    const char* name;
+    long n;
+    double phi;
+    bool periodic;
+    double strain;
+    Moments m;
+  };
+  const Spec specs[] = {{"sheared phi 0.45", 80, 0.45, true, 0.2, Moments::FTS},
+                        {"open phi 0.3", 60, 0.3, false, 0.0, Moments::FT}};
+  int seed = 40;
+  for (const Spec& sp : specs) {
+    const Case c = make_case(sp.name, sp.n, sp.phi, sp.periodic, sp.strain, 0.0, 0, false, std::uint64_t(seed++));
+    const Loaded l0 = loaded(c, flow, std::uint64_t(seed++));
+    for (double tol : {1e-3, 1e-6}) {
+      CAPTURE(sp.name);
+      CAPTURE(tol);
+      auto s = accelerated(c, sp.m, mu, tol);
+      s->prepare(l0.conf);
+      WarmStart warm;
+      const HydroResult r0 = s->solve(HydroProblem{l0.conf, c.fixed, l0.sample, l0.F, l0.T, nullptr, nullptr, &warm});
+      REQUIRE(warm.iterate.size() > 0);
+      // Smallest surface gap (placement keeps >= 1e-3 a) and the largest speed set the move.
+      double gap = 1e300, umax = 0.0;
+      for (std::size_t i = 0; i < c.x.size(); ++i) {
+        umax = std::max(umax, r0.U[i].norm());
+        for (std::size_t j = 0; j < i; ++j)
+          gap = std::min(gap, c.domain.minimum_image(c.x[i] - c.x[j]).norm() - c.a[i] - c.a[j]);
+      }
+      Case moved = c;
+      for (std::size_t i = 0; i < c.x.size(); ++i) moved.x[i] += (0.4 * gap / umax) * r0.U[i];
+      const Loaded l1 = loaded(moved, flow, std::uint64_t(seed - 1));  // the same loads
+      DenseStokesianDynamics dense(sp.m, mu, flow);
+      dense.prepare(l1.conf);
+      const HydroResult ref = dense.solve(HydroProblem{l1.conf, c.fixed, l1.sample, l1.F, l1.T});
+      s->prepare(l1.conf);
+      const HydroResult cold = s->solve(HydroProblem{l1.conf, c.fixed, l1.sample, l1.F, l1.T});
+      const int cold_products = s->stats().far_field_products;
+      const HydroResult hot = s->solve(HydroProblem{l1.conf, c.fixed, l1.sample, l1.F, l1.T, nullptr, nullptr, &warm});
+      const int warm_products = s->stats().far_field_products;
+      MESSAGE(std::string(sp.name) << " tol " << tol << ": far-field products cold " << cold_products << ", warm " << warm_products
+                      << "; errors " << compare(cold, ref, sp.m, c.fixed).worst() << " / "
+                      << compare(hot, ref, sp.m, c.fixed).worst());
+      CHECK(compare(cold, ref, sp.m, c.fixed).worst() <= tol);
+      CHECK(compare(hot, ref, sp.m, c.fixed).worst() <= tol);
+      CHECK(warm_products < cold_products);
+      // An iterate far worse than zero is dropped: one product more than the cold solve, same answer.
+      std::mt19937_64 rng(3);
+      std::normal_distribution<double> g;
+      for (Eigen::Index k = 0; k < warm.iterate.size(); ++k) warm.iterate[k] = 1e3 * g(rng);
+      const HydroResult bad = s->solve(HydroProblem{l1.conf, c.fixed, l1.sample, l1.F, l1.T, nullptr, nullptr, &warm});
+      CHECK(s->stats().far_field_products == cold_products + 1);
+      CHECK(compare(bad, cold, sp.m, c.fixed).worst() == 0.0);
+      // An iterate of another size (another solver or moment level) is ignored.
+      warm.iterate = VecX::Ones(3);
+      const HydroResult other = s->solve(HydroProblem{l1.conf, c.fixed, l1.sample, l1.F, l1.T, nullptr, nullptr, &warm});
+      CHECK(s->stats().far_field_products == cold_products);
+      CHECK(compare(other, cold, sp.m, c.fixed).worst() == 0.0);
+    }
+  }
+  // With held particles the warm start is not used: the answer is the cold one, bit for bit.
+  const Case h = holding_all_but_every(make_case("held", 60, 0.2, false, 0.0, 0.0, 0, false, 77), 2);
+  const Loaded lh = loaded(h, flow, 78);
+  auto s = accelerated(h, Moments::FT, mu, 1e-3);
+  s->prepare(lh.conf);
+  const HydroResult cold = s->solve(HydroProblem{lh.conf, h.fixed, lh.sample, lh.F, lh.T});
+  WarmStart warm;
+  warm.iterate = VecX::Ones(Eigen::Index(h.x.size()) * 6);
+  const HydroResult hot = s->solve(HydroProblem{lh.conf, h.fixed, lh.sample, lh.F, lh.T, nullptr, nullptr, &warm});
+  CHECK(compare(hot, cold, Moments::FT, h.fixed).worst() == 0.0);
+  CHECK(warm.iterate.size() == 0);
+}
+
 TEST_CASE("accelerated SD: set-up as task-graph phases equals prepare()") {
   const double mu = 1.0;
   FlowParams fp;

@@ -202,12 +202,17 @@ KrylovResult gmres(const LinearOperator& A, const VecX& b, VecX& x, double tol, 
   MatX H = MatX::Zero(restart + 1, restart);
   VecX cs(restart), sn(restart), g(restart + 1), w, Ax;
   // Initial residual: one product unless x starts at zero.
+  // A starting iterate worse than zero (|b - A x| > |b|) is dropped for zero.
   VecX r;
   if (x.isZero(0.0)) r = b;
   else {
     A(x, Ax);
     ++res.products;
     r = b - Ax;
+    if (!(r.norm() <= bnorm)) {
+      x.setZero();
+      r = b;
+    }
   }
   double rnorm = r.norm();
   double cycle_start = rnorm;

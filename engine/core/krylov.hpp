@@ -13,7 +13,8 @@
 //   least residual norm over the Krylov space, Arnoldi with modified Gram-Schmidt and one
 //   reorthogonalisation pass, Givens rotations for the small least-squares problem; restarted
 //   every `restart` iterations from the true residual. Stops when |b - A x| <= tol |b|; can keep
-//   the iterate where the residual first reaches a looser tolerance (GmresSnapshot).
+//   the iterate where the residual first reaches a looser tolerance (GmresSnapshot). Starts from
+//   the x it is given (one product for its residual; zero instead when that residual exceeds |b|).
 // bicgstab: van der Vorst's (1992) BiCGStab, two products per iteration and short recurrences;
 //   kept as the alternative the accelerated SD solver was measured against (bench_asd).
 //

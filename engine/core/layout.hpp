@@ -46,6 +46,16 @@ struct HydroResult {
   long regularised_pairs = -1; // lubrication pairs evaluated at the regularised minimum gap (-1: no near field)
 };
 
+// An iterative solver's last iterate, carried from one solve to a related one (a warm start: the
+// next stage of an integrator step solves the same kind of problem at nearby positions). Opaque to
+// callers: a solver starts from `iterate` when it has the solver's size and leaves its own final
+// iterate there; direct solvers ignore it. The answer does not depend on it beyond the solver's
+// tolerance; the iterations do. Callers keep it within one step, so that a run resumed from a
+// checkpoint repeats the same sequence of solves.
+struct WarmStart {
+  VecX iterate;
+};
+
 // Per-particle results from the full generalised motion `relative` = [U - u_inf, Omega - Omega_inf,
 // ...] and forces `moments` = [F, T, S]. Fixed particles get U = Omega = 0.
 HydroResult unpack_solution(Moments m, const FlowSample& flow, const VecX& relative, const VecX& moments,
