@@ -777,9 +777,8 @@ PairScalars pick(const ResistanceScalars& r, bool cross) {
 
 }  // namespace
 
-PairMatrix two_sphere_resistance(const Eigen::Vector3d& r_vec, double a1, double a2, double mu,
-                                 const ResistanceScalars& s11_12,
-                                 const ResistanceScalars& s22_21) {
+PairMatrix two_sphere_resistance_reference(const Eigen::Vector3d& r_vec, double a1, double a2, double mu,
+                                           const ResistanceScalars& s11_12, const ResistanceScalars& s22_21) {
   const double r = r_vec.norm();
   const Eigen::Vector3d d = r_vec / r;
   const double pi = kPi;
@@ -831,10 +830,11 @@ PairMatrix two_sphere_resistance(const Eigen::Vector3d& r_vec, double a1, double
   };
 
   PairMatrix R = PairMatrix::Zero();
+  const Blocks all[2][2] = {{blocks(0, 0), blocks(0, 1)}, {blocks(1, 0), blocks(1, 1)}};
   for (int a = 0; a < 2; ++a)
     for (int b = 0; b < 2; ++b) {
-      const Blocks k = blocks(a, b);   // (a, b)
-      const Blocks kt = blocks(b, a);  // (b, a), for the transposed couplings
+      const Blocks& k = all[a][b];   // (a, b)
+      const Blocks& kt = all[b][a];  // (b, a), for the transposed couplings
       const int ro = 11 * a, co = 11 * b;
       R.block<3, 3>(ro, co) = k.A;
       R.block<3, 3>(ro, co + 3) = kt.B.transpose();  // Bt_ab = B_ba^T
@@ -866,6 +866,74 @@ PairMatrix two_sphere_resistance(const Eigen::Vector3d& r_vec, double a1, double
           R(ro + 6 + m, co + 6 + n) = acc;
         }
       }
+    }
+  return R;
+}
+
+// The same matrix with the basis contractions done in closed form. With d the unit vector along
+// r_vec, B_m the orthonormal basis of symmetric traceless tensors (B_m:B_n = delta_mn), q_m = d.B_m.d,
+// b_m = B_m d and c_m = d x b_m, the tensors of the reference contract to
+//     B_m:G_.l  = n_G [XG q_m d_l + 2 YG (b_m,l - q_m d_l)]
+//     B_m:H_.l  = 2 n_H YH c_m,l
+//     B_m:M:B_n = n_M [3/2 XM q_m q_n + 2 YM (b_m.b_n - q_m q_n) + ZM (delta_mn - 2 b_m.b_n + q_m q_n / 2)]
+// (traceless B_m removes every delta_ij term), and B_ab = n_B YB eps_ijl d_l. About 20 times fewer
+// operations per pair; tests/test_resistance_functions.cpp holds it to the reference.
+PairMatrix two_sphere_resistance(const Eigen::Vector3d& r_vec, double a1, double a2, double mu,
+                                 const ResistanceScalars& s11_12, const ResistanceScalars& s22_21) {
+  const Eigen::Vector3d d = r_vec / r_vec.norm();
+  const double rad[2] = {a1, a2};
+  const auto& basis = sym_traceless_basis();
+  const Mat3 dd = d * d.transpose(), cross_d = (Mat3() << 0.0, d[2], -d[1], -d[2], 0.0, d[0], d[1], -d[0], 0.0).finished();
+  double q[5];
+  Eigen::Vector3d b[5], c[5];
+  for (int m = 0; m < 5; ++m) {
+    b[m] = basis[std::size_t(m)] * d;
+    q[m] = d.dot(b[m]);
+    c[m] = d.cross(b[m]);
+  }
+  double bb[5][5];
+  for (int m = 0; m < 5; ++m)
+    for (int n = 0; n <= m; ++n) bb[m][n] = bb[n][m] = b[m].dot(b[n]);
+  // Per ordered pair (a, b): the blocks A, B, C and the projected G (5 x 3), H (5 x 3), M (5 x 5).
+  struct Projected {
+    Mat3 A, B, C;
+    Eigen::Matrix<double, 5, 3> G, H;
+    Eigen::Matrix<double, 5, 5> M;
+  };
+  auto projected = [&](int a, int bi) {
+    const PairScalars p = a == 0 ? pick(s11_12, bi == 1) : pick(s22_21, bi == 0);
+    const double L = rad[a] + rad[bi];
+    const double nA = 3 * kPi * mu * L, nB = kPi * mu * L * L, nC = kPi * mu * L * L * L;
+    const double nG = nB, nH = nC, nM = 5.0 / 6.0 * kPi * mu * L * L * L;
+    Projected k;
+    k.A = nA * (p.XA * dd + p.YA * (Mat3::Identity() - dd));
+    k.C = nC * (p.XC * dd + p.YC * (Mat3::Identity() - dd));
+    k.B = nB * p.YB * cross_d;
+    for (int m = 0; m < 5; ++m) {
+      k.G.row(m) = (nG * (p.XG * q[m] * d + 2.0 * p.YG * (b[m] - q[m] * d))).transpose();
+      k.H.row(m) = (2.0 * nH * p.YH * c[m]).transpose();
+      for (int n = 0; n < 5; ++n)
+        k.M(m, n) = nM * (1.5 * p.XM * q[m] * q[n] + 2.0 * p.YM * (bb[m][n] - q[m] * q[n]) +
+                          p.ZM * ((m == n ? 1.0 : 0.0) - 2.0 * bb[m][n] + 0.5 * q[m] * q[n]));
+    }
+    return k;
+  };
+  const Projected all[2][2] = {{projected(0, 0), projected(0, 1)}, {projected(1, 0), projected(1, 1)}};
+  PairMatrix R;
+  for (int a = 0; a < 2; ++a)
+    for (int bi = 0; bi < 2; ++bi) {
+      const Projected& k = all[a][bi];   // (a, b)
+      const Projected& kt = all[bi][a];  // (b, a), for the transposed couplings
+      const int ro = 11 * a, co = 11 * bi;
+      R.block<3, 3>(ro, co) = k.A;
+      R.block<3, 3>(ro, co + 3) = kt.B.transpose();
+      R.block<3, 3>(ro + 3, co) = k.B;
+      R.block<3, 3>(ro + 3, co + 3) = k.C;
+      R.block<5, 3>(ro + 6, co) = k.G;
+      R.block<5, 3>(ro + 6, co + 3) = k.H;
+      R.block<3, 5>(ro, co + 6) = kt.G.transpose();
+      R.block<3, 5>(ro + 3, co + 6) = kt.H.transpose();
+      R.block<5, 5>(ro + 6, co + 6) = k.M;
     }
   return R;
 }

@@ -155,6 +155,10 @@ PairMatrix two_sphere_resistance(const Eigen::Vector3d& r_vec, double a1, double
 PairMatrix two_sphere_resistance(const Eigen::Vector3d& r_vec, double a1, double a2, double mu,
                                  const ResistanceScalars& s11_12,
                                  const ResistanceScalars& s22_21);
+/// The same assembled term by term from the tensors G_ijk, H_ijk, M_ijkl of JO84/J92 contracted
+/// with the basis: the plain reference twin of the closed-form contraction above (tests).
+PairMatrix two_sphere_resistance_reference(const Eigen::Vector3d& r_vec, double a1, double a2, double mu,
+                                           const ResistanceScalars& s11_12, const ResistanceScalars& s22_21);
 
 namespace detail {
 /// Sums sum_q T_{n,k-q,q} lambda^q/(1+lambda)^k, k = 0..order, of coefficient array id
