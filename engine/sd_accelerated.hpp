@@ -53,7 +53,9 @@
 // far larger than some solved quantities (held particles in a flow, small holding forces on a
 // wall); the error then exceeded the tolerance up to 3x (N = 1000, phi = 0.2, half held). After the
 // first pass the solve continues to a tenth of the residual, and takes the change of every solved
-// quantity as the estimate of its error, until that is below kHeldErrorTarget (solve()).
+// quantity as the estimate of its error, until that is below kHeldErrorTarget (solve()). A pass that
+// stalls at the round-off floor (tolerances near 1e-10 ask residuals near kMinResidual) after
+// meeting the GMRES tolerance keeps its iterate.
 //
 // Warm start: HydroProblem::warm (engine/core/layout.hpp) gives GMRES its initial W (the Fixman step
 // passes the iterate of the same kind of solve at x0 to the midpoint solve); not used with held
