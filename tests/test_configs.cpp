@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <chrono>
 #include <filesystem>
 #include <limits>
 
@@ -55,7 +56,9 @@ TEST_CASE("example scenes run briefly and stay physical") {
     RunControl rc;
     rc.quiet = true;
     rc.max_steps = steps;
-    REQUIRE_NOTHROW(sim.run(s, out, rc));  // a PhysicsError (non-finite state, deep overlap) stops it
+    const auto start = std::chrono::steady_clock::now();
+    REQUIRE_NOTHROW(sim.run(s, out, rc));
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();  // a PhysicsError (non-finite state, deep overlap) stops it
     REQUIRE(long(out.frames.size()) == steps + 1);
     double min_gap = std::numeric_limits<double>::infinity();
     long overlaps = 0;
@@ -70,7 +73,7 @@ TEST_CASE("example scenes run briefly and stay physical") {
         for (std::size_t i = 0; i < u->second.values.size(); ++i)
           if (id == f.particles.end() || id->second.values[i / 3] >= 0) REQUIRE(std::isfinite(u->second.values[i]));
     }
-    MESSAGE(entry.path().filename().string() << ": " << steps << " steps, smallest gap " << min_gap << " a, overlapping pairs " << overlaps);
+    MESSAGE(entry.path().filename().string() << ": " << steps << " steps (" << seconds << " s), smallest gap " << min_gap << " a, overlapping pairs " << overlaps);
     // Athermal examples: their repulsions keep surfaces apart (a Hertz backstop at their force
     // scale would overlap by < 0.01 a). Brownian examples: thermal kicks push into the Hertz contact;
     // at 0.05 a its energy (2/5) k d^(5/2) is 4.5 kT for the examples' k = 20000 kT/a^(5/2).

@@ -398,7 +398,9 @@ TEST_CASE("accelerated SD: the held-row preconditioner and the plain solve agree
           else CHECK(it_fast <= 0.8 * it_plain);
         }
         // Next configurations: the mobile particles moved (the held blocks are kept), then every
-        // particle moved (the blocks are redone); the same solver objects.
+        // particle moved (the blocks are redone); the same solver objects. At the middle tolerance
+        // (the kept and redone blocks do not depend on it).
+        if (tol != 1e-5) continue;
         for (bool move_held : {false, true}) {
           std::vector<Vec3> x2 = c.x;
           for (std::size_t i = 0; i < x2.size(); ++i)

@@ -48,17 +48,33 @@ VecX random_vector(long size, unsigned seed) {
   return v;
 }
 
-double tree_error(const Cloud& c, Moments m, const TreeParameters& p, unsigned seed = 7) {
-  const Domain open;
+// The direct product of a random input (seeded): the reference of tree_error.
+struct DirectReference {
+  VecX in, y;
+};
+DirectReference direct_reference(const Cloud& c, Moments m, unsigned seed) {
+  DirectReference r;
+  r.in = random_vector(long(c.x.size()) * dof_per_particle(m), seed);
+  mobility_product(c.x, c.a, 1.0, m, r.in, r.y);
+  return r;
+}
+
+// Relative error of the tree's product on cloud c (its set-up, TreeFarField's constructor, is shared
+// by the clouds of one test).
+double tree_error(TreeFarField& tree, const Cloud& c, const DirectReference& ref) {
+  tree.set_configuration({c.x, c.a, Domain{}});
+  VecX y_tree;
+  tree.apply(ref.in, y_tree);
+  return (y_tree - ref.y).norm() / ref.y.norm();
+}
+TreeFarField make_tree(Moments m, const TreeParameters& p) {
   MobilitySpec spec;
   spec.moments = m;
-  TreeFarField tree(spec, p);
-  tree.set_configuration({c.x, c.a, open});
-  const VecX in = random_vector(tree.size(), seed);
-  VecX y_tree, y_direct;
-  tree.apply(in, y_tree);
-  mobility_product(c.x, c.a, 1.0, m, in, y_direct);
-  return (y_tree - y_direct).norm() / y_direct.norm();
+  return TreeFarField(spec, p);
+}
+double tree_error(const Cloud& c, Moments m, const TreeParameters& p, unsigned seed = 7) {
+  TreeFarField tree = make_tree(m, p);
+  return tree_error(tree, c, direct_reference(c, m, seed));
 }
 
 }  // namespace
@@ -230,9 +246,10 @@ TEST_CASE("tree product: independent of the thread count, and its asymmetry boun
 
 TEST_CASE("knobs from the tolerance: achieved <= requested from 1e-2 to 1e-12 (uniform, polydisperse, dense cloud)") {
   // n spheres: uniform (phi = 0.13), radii 0.3-3 (overlaps), and a dense spherical cloud (phi =
-  // 0.3). The default suite uses n = 1200; the long form (ctest -L long: test_tree_tolerance_long,
-  // n = 3000, about 2 minutes) is large enough that the tree converts most interactions at every
-  // theta the rule picks.
+  // 0.3), with every leaf size the tuning of set_configuration can pick (32, 64, 128; the FT model's
+  // factor comes from the dense cloud with leaves of 32, trees/tree_mobility.hpp). The default suite
+  // uses n = 1200; the long form (ctest -L long: test_tree_tolerance_long, n = 3000) is large enough
+  // that the tree converts most interactions at every theta the rule picks.
   const char* env = std::getenv("STOKESIAN_TREE_SWEEP_N");
   const int n = env ? std::atoi(env) : 1200;
   const double scale = std::cbrt(n / 3000.0);
@@ -249,14 +266,23 @@ TEST_CASE("knobs from the tolerance: achieved <= requested from 1e-2 to 1e-12 (u
     clouds.push_back(ball);
   }
   for (Moments m : {Moments::F, Moments::FT, Moments::FTS}) {
+    std::vector<DirectReference> refs;  // one direct product per cloud, shared by the tolerances
+    for (std::size_t k = 0; k < clouds.size(); ++k) refs.push_back(direct_reference(clouds[k], m, unsigned(30 + k)));
     for (double t : {1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-10, 1e-12}) {
       const TreeParameters p = tree_parameters(t, m);
       CHECK(tree_error_model(p, m) <= t);
-      for (std::size_t k = 0; k < clouds.size(); ++k) {
-        const double err = tree_error(clouds[k], m, p, unsigned(30 + k));
-        MESSAGE(std::string(to_string(m)) << " tol " << t << " theta " << p.theta << " p " << p.order << " cloud " << k
-                             << " error " << err << " ratio " << err / t);
-        CHECK(err <= t);
+      for (int leaf : {32, 64, 128}) {
+        TreeParameters q = p;
+        q.leaf_size = leaf;
+        TreeFarField tree = make_tree(m, q);
+        for (std::size_t k = 0; k < clouds.size(); ++k) {
+          const double err = tree_error(tree, clouds[k], refs[k]);
+          MESSAGE(std::string(to_string(m)) << " tol " << t << " theta " << p.theta << " p " << p.order << " leaf " << leaf
+                                          << " cloud " << k << " error " << err << " ratio " << err / t);
+          CAPTURE(leaf);
+          CAPTURE(k);
+          CHECK(err <= t);
+        }
       }
     }
   }
@@ -335,3 +361,4 @@ TEST_CASE("a dilute spherical cloud settles at the Hadamard-Rybczynski velocity 
   MESSAGE("mean settling velocity " << -mean_uz << ", W / (5 pi mu R) = " << hadamard << ", ratio " << -mean_uz / hadamard);
   CHECK(-mean_uz / hadamard == doctest::Approx(1.0).epsilon(0.03));
 }
+

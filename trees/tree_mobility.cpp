@@ -257,7 +257,8 @@ double conversion_seconds(int p, Moments m) { return 0.05e-6 + 0.40e-9 * convers
 double tree_error_model(const TreeParameters& p, Moments m) {
   const double geometric = std::pow(p.theta, p.order + 1);
   if (m == Moments::FTS) return 0.05 * (p.order + 1) * geometric;
-  return std::max(0.2 / (p.order + 1), 0.025) * geometric;
+  const double c = std::max(0.2 / (p.order + 1), 0.025);
+  return (m == Moments::FT ? 4.0 * c : c) * geometric;  // FT: tree_mobility.hpp
 }
 
 namespace {
