@@ -213,10 +213,10 @@ PmeParameters pme_parameters(double tol, const Lattice& lattice, int n, double a
   // The search costs milliseconds; its inputs repeat for every operator of a run (the grid does not
   // depend on the strain), so results are kept.
   using Key =
-      std::tuple<double, double, double, double, bool, int, double, double, int, double, double, int, double, double>;
+      std::tuple<double, double, double, double, bool, int, double, double, int, double, double, int, double, double, double>;
   const Key key{tol,    lattice.A(0, 0), lattice.A(1, 1), lattice.A(2, 2), lattice.strain != 0.0,
                 n,      a_min,           a_max,           int(m),          opt.neighbours,
-                opt.sigma, int(opt.window), opt.self_scale2, opt.products_per_update};
+                opt.sigma, int(opt.window), opt.self_scale2, opt.products_per_update, opt.cache_bytes};
   static std::mutex mutex;
   static std::map<Key, PmeParameters> cache;
   {
@@ -252,6 +252,7 @@ PmeParameters search(double tol, const Lattice& lattice, int n, double a_min, do
   const CostConstants cc = cost_constants(m);
   // Set-up per product (0 when the caller prices the product alone).
   const double setup_share = opt.products_per_update > 0.0 ? 1.0 / opt.products_per_update : 0.0;
+  best.cache_bytes = opt.cache_bytes > 0.0 ? opt.cache_bytes : double(RealSpaceSum::kDefaultCacheBytes);
   // Real space: the closest neglected pairs are the smallest spheres (gap-based cutoff).
   auto real_error2 = [&](double gap, double xi) {
     double e = 0.0;
@@ -296,7 +297,7 @@ PmeParameters search(double tol, const Lattice& lattice, int n, double a_min, do
       std::array<int, 3> M;
       for (int d = 0; d < 3; ++d) M[d] = fft_size(int(std::ceil(sigma * k_in * len[d] / kPi)));
       const double G = double(M[0]) * M[1] * M[2];
-      const bool cached = 2.0 * pairs * cc.cache_bytes <= double(RealSpaceSum::kDefaultCacheBytes);
+      const bool cached = 2.0 * pairs * cc.cache_bytes <= best.cache_bytes;
       const double setup_pairs = (kSetupParticle * n + setup_entry(m) * 2.0 * pairs) * setup_share;
       const double fixed =
           (cached ? cc.pair_cached : cc.pair) * pairs + 6.0 * kFft * G * std::log2(G) + kGrid * G + setup_pairs;

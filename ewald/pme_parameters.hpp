@@ -55,6 +55,9 @@ struct PmeParameters {
   // Model estimates (relative to S, see above) and the modelled cost [s] per product.
   double est_real = 0, est_wave = 0, est_alias = 0, est_cost = 0;
   double est_setup = 0;  // modelled set-up of one configuration [s] (counted in est_cost / products_per_update)
+  // Memory allowed for the real-space scalar cache [bytes] (real_space.hpp): the model prices the
+  // pairs as cached when their scalars fit in it, and PmeFarField builds its real-space sum with it.
+  double cache_bytes = 0;
 };
 
 struct PmeOptions {
@@ -69,6 +72,9 @@ struct PmeOptions {
   // divided by it. 0 = price the product alone (many products per configuration). Only the cost
   // changes with it, never the accuracy. The engine passes MobilitySpec::products_per_configuration.
   double products_per_update = 0.0;
+  // Budget of the real-space scalar cache [bytes]; 0 = RealSpaceSum::kDefaultCacheBytes (256 MB).
+  // bench/bench_pme_model.cpp studies what a budget growing with N would change.
+  double cache_bytes = 0.0;
   // Use these parameters as they are (tests and benchmarks that probe the model's parts).
   std::optional<PmeParameters> fixed;
 };
