@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Charts of steady-shear rheology from a sweep's summary table, against the Peclet number or the volume fraction.
 
-    /usr/bin/python3 bench/plot_rheology.py DIR [--out FILE.png] [--json FILE.json] [--check]
+    /usr/bin/python3 bench/plot_rheology.py DIR [--out FILE.png] [--json FILE.json] [--check] [--merge OLD.json]
 
 DIR is the folder of `stokesian sweep` over `flow.peclet` (Brownian suspensions, e.g.
 configs/sweeps/hard_sphere_peclet.toml) or over `particles.volume_fraction` (the non-Brownian
@@ -13,6 +13,9 @@ mu rate = Pe kT / (6 pi a^3) (the scene's Pe convention; kT from the first run's
 phi with mu and rate of the first run's scene. Published values, where
 tests/data/rheology_references.json holds them (entries whose values have "Pe" or "phi" and
 "eta_r"), are drawn as open symbols with their source in the legend.
+
+--merge adds the points of an earlier chart's JSON at x values DIR has no finished run for (points
+whose runs were made in another folder); the chart's title and the JSON's "merged" name them.
 
 The JSON also holds the published qualitative shape as named checks (shape_checks); --check
 exits 1 unless all pass (for full sweeps; the quick CI sweep is too short to show the shape).
@@ -136,6 +139,8 @@ def main():
     ap.add_argument("--out", default="bench/results/rheology.png")
     ap.add_argument("--json", default="")
     ap.add_argument("--check", action="store_true", help="exit 1 unless every shape check passes (full sweeps)")
+    ap.add_argument("--merge", action="append", default=[], metavar="OLD.json",
+                    help="add the points of an earlier chart's JSON (same swept key) at x values the folder lacks")
     a = ap.parse_args()
     rows, xkey, scene = load(a.folder)
     xname, xlabel, logx = AXES[xkey]
@@ -146,27 +151,49 @@ def main():
         return x * kT / (6 * math.pi) if xname == "Pe" else mu * flow["rate"]
 
     table = {}
-    fig, ax = plt.subplots(1, 2, figsize=(11, 4.3))
     for part in PARTS:
         c = combine(rows, "relative_viscosity" + part, xkey)
+        if c:
+            table["relative_viscosity" + part] = {str(x): c[x] for x in c}
+    for name in ("N1", "N2"):
+        for part in PARTS:
+            c = combine(rows, name + part, xkey)
+            if c:
+                table[name + part + "_over_mu_rate"] = {
+                    str(x): (c[x][0] / mu_rate(x), c[x][1] / mu_rate(x), c[x][2]) for x in c}
+    # Points of an earlier chart's JSON whose runs are not in the folder (--merge), for x values the
+    # folder does not have.
+    merged = {}
+    for path in a.merge:
+        old = json.load(open(path))
+        if old.get("x") != xkey:
+            sys.exit(f"plot_rheology: {path}: varies {old.get('x')}, not {xkey}")
+        for series, vals in old.get("series", {}).items():
+            t = table.setdefault(series, {})
+            for x, v in vals.items():
+                if x not in t:
+                    t[x] = tuple(v)
+                    merged.setdefault(path, set()).add(float(x))
+    for series in table:
+        table[series] = dict(sorted(table[series].items(), key=lambda kv: float(kv[0])))
+
+    fig, ax = plt.subplots(1, 2, figsize=(11, 4.3))
+    for part in PARTS:
+        c = table.get("relative_viscosity" + part)
         if not c:
             continue
-        xs = list(c)
+        xs = [float(x) for x in c]
         # The fluid's 1 is drawn with the hydrodynamic part, as published plots do.
-        y = [c[x][0] + (1.0 if part == "_hydrodynamic" else 0.0) for x in xs]
-        ax[0].errorbar(xs, y, yerr=[c[x][1] for x in xs], marker="o", capsize=3, color=COLOR[part], label=LABEL[part])
-        table["relative_viscosity" + part] = {str(x): c[x] for x in xs}
+        y = [v[0] + (1.0 if part == "_hydrodynamic" else 0.0) for v in c.values()]
+        ax[0].errorbar(xs, y, yerr=[v[1] for v in c.values()], marker="o", capsize=3, color=COLOR[part], label=LABEL[part])
     for name, style in (("N1", "s"), ("N2", "^")):
-        for part in ("", "_hydrodynamic", "_brownian", "_interparticle"):
-            c = combine(rows, name + part, xkey)
+        for part in PARTS:
+            c = table.get(name + part + "_over_mu_rate")
             if not c:
                 continue
-            xs = list(c)
-            scale = [mu_rate(x) for x in xs]
-            ax[1].errorbar(xs, [c[x][0] / s for x, s in zip(xs, scale)], yerr=[c[x][1] / s for x, s in zip(xs, scale)],
+            ax[1].errorbar([float(x) for x in c], [v[0] for v in c.values()], yerr=[v[1] for v in c.values()],
                            marker=style, capsize=3, color=COLOR[part], ls="-" if name == "N1" else "--",
                            lw=2.0 if part == "" else 1.0, label=f"{name} {LABEL[part].replace(' (+ fluid)', '')}")
-            table[name + part + "_over_mu_rate"] = {str(x): (c[x][0] / s, c[x][1] / s, c[x][2]) for x, s in zip(xs, scale)}
     for key, source, vals in references(xname):
         pts = [v for v in vals if "eta_r" in v]
         if pts:
@@ -182,7 +209,10 @@ def main():
     ax[1].set_ylabel("N / (mu rate)")
     ax[1].set_title("(b) normal-stress differences (N1 solid, N2 dashed)")
     ax[1].legend(fontsize=7)
-    fig.suptitle(f"{os.path.basename(os.path.abspath(a.folder))}: {len(rows)} finished runs; error bars: blocked standard errors")
+    note = "; merged: " + ", ".join(f"{xname} = {', '.join('%g' % x for x in sorted(v))} from {os.path.basename(k)}"
+                                    for k, v in merged.items()) if merged else ""
+    fig.suptitle(f"{os.path.basename(os.path.abspath(a.folder))}: {len(rows)} finished runs{note}; error bars: blocked standard errors",
+                 fontsize=9)
     fig.tight_layout()
     fig.savefig(a.out, dpi=110)
     print(f"wrote {a.out}")
@@ -196,6 +226,7 @@ def main():
         except (OSError, subprocess.CalledProcessError):
             git = "unknown"
         json.dump({"git": git, "folder": os.path.abspath(a.folder), "x": xkey, "runs": len(rows), "kT": kT, "mu": mu,
+                   "merged": {k: sorted(v) for k, v in merged.items()},
                    "series": table, "shape_checks": checks}, open(a.json, "w"), indent=1)
         print(f"wrote {a.json}")
     if a.check and not all(c["pass"] for c in checks.values()):
