@@ -5,9 +5,8 @@
 //   budget 0: the engine's fixed 256 MB (RealSpaceSum::kDefaultCacheBytes);
 //   budget 1: 8 kB per particle (at least 256 MB);
 //   budget 2: unbounded.
-// Real-space memory per particle (engine/resources.cpp's estimate): 2 x 36 bytes per pair (pair
-// arrays and the pair search's per-thread copy) plus the scalar cache when it fits (16 / 112 bytes
-// per ordered pair for F / FTS).
+// Real-space memory per particle: RealSpaceSum::pair_bytes_for and cache_bytes_for (the counts of
+// engine/resources.cpp's estimate: the pair data twice, and the scalar cache when it fits).
 // Configurations as bench_pme (unit spheres, cubic box, phi 0.1 and 0.4); F and FTS; tolerances
 // 1e-3, 1e-4, 1e-6. Rows: moments (3 = F, 11 = FTS), phi, tol, N, budget; grid, support,
 // neighbours (particles within the cutoff sphere), cached (0/1), cost_per_particle_us,
@@ -46,9 +45,9 @@ int main(int argc, char** argv) {
             const ewald::PmeParameters p = ewald::pme_parameters(tol, lattice, int(n), 1.0, 1.0, m, o);
             const double rho = double(n) / lattice.volume;
             const double nb = std::min(double(n - 1), rho * 4.0 / 3.0 * M_PI * std::pow(p.cutoff_gap + 2.0, 3));
-            const double entry = m == Moments::F ? 16.0 : 112.0;
-            const bool cached = double(n) * nb * entry <= p.cache_bytes;
-            const double bytes = 36.0 * nb + (cached ? entry * nb : 0.0);  // per particle: 2 x 36 B per pair
+            const double cache = ewald::RealSpaceSum::cache_bytes_for(double(n) * nb, m);
+            const bool cached = cache <= p.cache_bytes;
+            const double bytes = (ewald::RealSpaceSum::pair_bytes_for(double(n) * nb) + (cached ? cache : 0.0)) / double(n);
             const double us = 1e6 * p.est_cost / double(n);
             std::printf("  %.2f", us);
             if (n == sizes.front()) first = p.est_cost;

@@ -47,7 +47,7 @@ def main():
         for r in range(2):
             axes[r, col].set_xscale("log")
     axes[0, 0].set_ylabel("modelled cost per particle [us], one thread")
-    axes[1, 0].set_ylabel("real-space memory per particle [kB]\n(pairs 72 B each + scalar cache when kept)")
+    axes[1, 0].set_ylabel("real-space memory per particle [kB]\n(pair data twice + scalar cache when kept)")
     axes[0, 0].legend(fontsize=7)
     fig.suptitle("PME cost model: the fixed scalar-cache budget makes the cost per particle jump from N ~ 1e5;"
                  " a budget growing with N keeps it flat at several times the memory")

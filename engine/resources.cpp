@@ -168,14 +168,12 @@ ResourceEstimate estimate_resources(const Scene& s, const ResolvedModel& model) 
                                 gk});
         const double P = p.support;
         const double pairs = N * neighbours(N, rho, p.cutoff_gap + 2 * a_max) / 2;
-        // ewald/real_space.hpp: per ordered pair a neighbour index, unit vector and distance (36
-        // bytes), twice: the pair arrays and the pair search's per-thread copy, kept between updates
-        // with 10 % spare capacity (measured: F, N = 1e5, phi = 0.1, tolerance 1e-4: peak RSS 818 MB
-        // against an estimate of 571 MB with one copy); and the scalar cache (16 / 48 / 112 bytes per
-        // ordered pair for F / FT / FTS) within its budget.
-        double cache = 2 * pairs * (d == 3 ? 16.0 : d == 6 ? 48.0 : 112.0);
-        if (cache > double(ewald::RealSpaceSum::kDefaultCacheBytes)) cache = 0.0;
-        e.components.push_back({"PME windows and pairs", 8.0 * (12 * P + 2) * N + 12.0 * N + 2.1 * 2 * 36.0 * pairs + cache,
+        // Pair data and scalar cache of the real-space sum (ewald/real_space.hpp), within the
+        // budget the parameters carry.
+        double cache = ewald::RealSpaceSum::cache_bytes_for(2 * pairs, model.moments);
+        if (cache > p.cache_bytes) cache = 0.0;
+        e.components.push_back({"PME windows and pairs", 8.0 * (12 * P + 2) * N + 12.0 * N +
+                                                              ewald::RealSpaceSum::pair_bytes_for(2 * pairs) + cache,
                                 "support P = " + num(P) + ", " + num(pairs) + " real-space pairs within cut-off gap " +
                                     num(p.cutoff_gap) + " a",
                                 gk});

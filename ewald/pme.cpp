@@ -95,9 +95,7 @@ void PmeFarField::build(const std::vector<Vec3>& x, const std::vector<double>& a
   set_lattice();
   radius_ = a;
   set_windows(x);
-  // The scalar-cache budget the model priced (fixed parameters without one: the default).
-  const double cache = p_.cache_bytes > 0.0 ? p_.cache_bytes : double(RealSpaceSum::kDefaultCacheBytes);
-  real_ = RealSpaceSum(x, a, domain, p_.cutoff_gap, p_.xi, mu, m, tolerance_, std::size_t(cache));
+  real_ = RealSpaceSum(x, a, domain, p_.cutoff_gap, p_.xi, mu, m, tolerance_, std::size_t(p_.cache_bytes));
 
   // FFTW arrays and plans.
   fft_ = std::make_unique<Fft>();

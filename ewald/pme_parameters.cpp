@@ -30,17 +30,17 @@ constexpr double kEdge = 0.065;
 
 // Cost per unit of the model [s] on the reference machine (2-core AMD EPYC VM, one thread), measured
 // 2026-11-24: real-space pairs by bench/bench_pme_real.cpp (with and without the per-entry scalar
-// cache of real_space.hpp, which holds `cache_bytes` per ordered pair up to RealSpaceSum's budget);
+// cache of real_space.hpp, RealSpaceSum::cache_bytes_for per ordered pair, within the budget);
 // window points (spread + interpolate, per particle and P^3) and transforms by timing apply_wave
 // at fixed parameters over grids 32^3-192^3 and P = 4-12 (N = 10^4, phi = 0.4).
 struct CostConstants {
-  double pair_cached, pair, cache_bytes, point;
+  double pair_cached, pair, point;
 };
 CostConstants cost_constants(Moments m) {
   switch (m) {
-    case Moments::F: return {4e-9, 18e-9, 16, 2.5e-9};
-    case Moments::FT: return {10e-9, 44e-9, 48, 5.0e-9};
-    default: return {32e-9, 75e-9, 112, 5.5e-9};
+    case Moments::F: return {4e-9, 18e-9, 2.5e-9};
+    case Moments::FT: return {10e-9, 44e-9, 5.0e-9};
+    default: return {32e-9, 75e-9, 5.5e-9};
   }
 }
 constexpr double kFft = 0.25e-9;  // per point and log2(points), one 3D field, forward or backward
@@ -252,7 +252,7 @@ PmeParameters search(double tol, const Lattice& lattice, int n, double a_min, do
   const CostConstants cc = cost_constants(m);
   // Set-up per product (0 when the caller prices the product alone).
   const double setup_share = opt.products_per_update > 0.0 ? 1.0 / opt.products_per_update : 0.0;
-  best.cache_bytes = opt.cache_bytes > 0.0 ? opt.cache_bytes : double(RealSpaceSum::kDefaultCacheBytes);
+  if (opt.cache_bytes > 0.0) best.cache_bytes = opt.cache_bytes;
   // Real space: the closest neglected pairs are the smallest spheres (gap-based cutoff).
   auto real_error2 = [&](double gap, double xi) {
     double e = 0.0;
@@ -297,7 +297,7 @@ PmeParameters search(double tol, const Lattice& lattice, int n, double a_min, do
       std::array<int, 3> M;
       for (int d = 0; d < 3; ++d) M[d] = fft_size(int(std::ceil(sigma * k_in * len[d] / kPi)));
       const double G = double(M[0]) * M[1] * M[2];
-      const bool cached = 2.0 * pairs * cc.cache_bytes <= best.cache_bytes;
+      const bool cached = RealSpaceSum::cache_bytes_for(2.0 * pairs, m) <= best.cache_bytes;
       const double setup_pairs = (kSetupParticle * n + setup_entry(m) * 2.0 * pairs) * setup_share;
       const double fixed =
           (cached ? cc.pair_cached : cc.pair) * pairs + 6.0 * kFft * G * std::log2(G) + kGrid * G + setup_pairs;

@@ -35,6 +35,7 @@
 // Lees-Edwards: the grid and all parameters are chosen for the longest reduced a_2 (|gamma'| = Lx / (2 Ly)),
 // so they do not change with the strain (the FFT plans are kept while the box shears).
 #include "ewald/lattice.hpp"
+#include "ewald/real_space.hpp"
 #include "ewald/window.hpp"
 
 #include <array>
@@ -57,7 +58,7 @@ struct PmeParameters {
   double est_setup = 0;  // modelled set-up of one configuration [s] (counted in est_cost / products_per_update)
   // Memory allowed for the real-space scalar cache [bytes] (real_space.hpp): the model prices the
   // pairs as cached when their scalars fit in it, and PmeFarField builds its real-space sum with it.
-  double cache_bytes = 0;
+  double cache_bytes = double(RealSpaceSum::kDefaultCacheBytes);
 };
 
 struct PmeOptions {
@@ -72,7 +73,7 @@ struct PmeOptions {
   // divided by it. 0 = price the product alone (many products per configuration). Only the cost
   // changes with it, never the accuracy. The engine passes MobilitySpec::products_per_configuration.
   double products_per_update = 0.0;
-  // Budget of the real-space scalar cache [bytes]; 0 = RealSpaceSum::kDefaultCacheBytes (256 MB).
+  // Budget of the real-space scalar cache [bytes]; 0 = PmeParameters' default (256 MB).
   // bench/bench_pme_model.cpp studies what a budget growing with N would change.
   double cache_bytes = 0.0;
   // Use these parameters as they are (tests and benchmarks that probe the model's parts).

@@ -155,6 +155,10 @@ STOKESIAN_RS_INLINE void apply_block(const mobility::PairScalars& s, double ex, 
 
 }  // namespace
 
+double RealSpaceSum::cache_bytes_for(double entries, Moments m) {
+  return entries * cached_scalars(m) * double(sizeof(double));
+}
+
 RealSpaceSum::RealSpaceSum(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain,
                            double cutoff_gap, double xi, double mu, Moments m, double tolerance,
                            std::size_t cache_bytes)
@@ -548,7 +552,7 @@ void RealSpaceSum::set_positions(const std::vector<Vec3>& x) {
   pairs_ = std::size_t(ns + no) / 2;
   // Scalars of the separated entries, kept when they fit in the budget (the storage is reused by
   // later updates).
-  if (double(ns) * cached_scalars(m_) * sizeof(double) > double(cache_bytes_)) {
+  if (cache_bytes_for(double(ns), m_) > double(cache_bytes_)) {
     cache_.clear();
     cache_.shrink_to_fit();
   } else {

@@ -64,6 +64,13 @@ class RealSpaceSum {
                double xi, double mu, Moments m, double tolerance,
                std::size_t cache_bytes = kDefaultCacheBytes);
   static constexpr std::size_t kDefaultCacheBytes = std::size_t(256) << 20;
+  // Memory of `entries` separated ordered pairs [bytes]: the scalar cache (16 / 48 / 112 bytes per
+  // entry for F / FT / FTS; kept when it fits in cache_bytes), and the pair data (neighbour index,
+  // unit vector and distance, 36 bytes per entry) held twice: the arrays the product reads and the
+  // pair search's per-thread copy, kept between updates with 10 % spare capacity (measured in
+  // docs/reliability.md). The cost model (pme_parameters.cpp) and the resource estimate use them.
+  static double cache_bytes_for(double entries, Moments m);
+  static double pair_bytes_for(double entries) { return 2.1 * 36.0 * entries; }
 
   // New positions of the same particles (same radii, box, strain): rebuilds the cell order and
   // the pair data, keeps the tables and self terms. The result equals a new object's.

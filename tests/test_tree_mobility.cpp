@@ -361,4 +361,3 @@ TEST_CASE("a dilute spherical cloud settles at the Hadamard-Rybczynski velocity 
   MESSAGE("mean settling velocity " << -mean_uz << ", W / (5 pi mu R) = " << hadamard << ", ratio " << -mean_uz / hadamard);
   CHECK(-mean_uz / hadamard == doctest::Approx(1.0).epsilon(0.03));
 }
-

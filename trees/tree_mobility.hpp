@@ -69,10 +69,10 @@ struct TreeParameters {
 // C(p) bounds the largest error measured for theta 0.2-0.7 on uniform, clustered and radius-ratio-10
 // clouds with leaves of 16 (bench_tree kind 2; F: 0.19, 0.094, 0.052, 0.036, 0.029, 0.023, 0.021,
 // 0.021 at p = 0, 1, 2, 3, 4, 6, 8, 10). FT's factor 4: with F's C(p) a dense ball (phi = 0.3,
-// N = 1200-2000) with leaves of 32 reached 1.2-1.8 times the requested error (FT only; 0.6 at
+// N = 1200-2000) with leaves of 32 reached 1.0-1.8 times the requested error (FT only; 0.6 at
 // N = 4000-8000). tests/test_tree_mobility.cpp checks achieved <= requested from 1e-2 to 1e-12
-// for every leaf size the tuning can pick. Throws std::invalid_argument for t outside [1e-14, 0.5] (1e-14 is the floor
-// of the engine's knobs, engine/accuracy.cpp).
+// for every leaf size the tuning can pick. Throws std::invalid_argument for t outside [1e-14, 0.5]
+// (1e-14 is the floor of the engine's knobs, engine/accuracy.cpp).
 TreeParameters tree_parameters(double tolerance, Moments m);
 
 // `far_field = "auto"` in open domains picks the tree from this N on (0: never), with t the
