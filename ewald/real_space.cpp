@@ -89,6 +89,69 @@ void wave_derivatives(LD r, LD xi, std::array<std::array<LD, 4>, 3>& d) {
 // Scalars kept per cached entry (yht = yh): xa ya | yb ybt xc yc | xg yg xgt ygt yh xm ym zm.
 constexpr int cached_scalars(Moments m) { return m == Moments::F ? 2 : (m == Moments::FT ? 6 : 14); }
 
+// The pair scalars (record order xa ya | yb ybt xc yc | xg yg xgt ygt yh xm ym zm; the first
+// cached_scalars(M)) from w[3k + j] = d_{k+1} W_j / (8 pi mu) (k-major; F uses k < 2), radii squared
+// A (this row) and B, u = 1/r, km = 1/(8 pi mu): the derivatives of Psi = B0 + c1 B1 + c2 B2 with
+// B0 = r - W0, B1 = 2 / r - W1, B2 = -W2 for each kind pair, then mobility::scalars_from_derivatives
+// written with u. Used in double by the product and in long double for the monodisperse tables.
+template <Moments M, class T>
+STOKESIAN_RS_INLINE void scalars_from_w(const T* w, T A, T B, T u, T km, T* out) {
+  const T u2 = u * u, u3 = u2 * u, AB = A * B;
+  // Products by reciprocals: a division per entry cost its latency in the uncached product.
+  constexpr T k6 = T(1) / T(6), k10 = T(1) / T(10), k36 = T(1) / T(36), k60 = T(1) / T(60), k100 = T(1) / T(100);
+  {
+    const T c1 = (A + B) * k6, c2 = AB * k36;  // ff
+    const T D1 = km - w[0] + c1 * (T(-2) * km * u2 - w[1]) - c2 * w[2];
+    const T D2 = -w[3] + c1 * (T(4) * km * u3 - w[4]) - c2 * w[5];
+    out[0] = T(2) * D1 * u;
+    out[1] = D2 + D1 * u;
+  }
+  if constexpr (M != Moments::F) {
+    const T u4 = u2 * u2, u5 = u4 * u;
+    const T b0[4] = {km - w[0], -w[3], -w[6], -w[9]};
+    const T b1[4] = {T(-2) * km * u2 - w[1], T(4) * km * u3 - w[4], T(-12) * km * u4 - w[7], T(48) * km * u5 - w[10]};
+    const T b2[4] = {-w[2], -w[5], -w[8], -w[11]};
+    auto derivs = [&](T c1, T c2, T* D) {
+      for (int q = 0; q < 4; ++q) D[q] = b0[q] + c1 * b1[q] + c2 * b2[q];
+    };
+    T tf[4], ft[4], t4[4];
+    derivs(A * k10 + B * k6, AB * k60, tf);
+    derivs(A * k6 + B * k10, AB * k60, ft);
+    derivs((A + B) * k10, AB * k100, t4);
+    out[2] = T(-0.5) * tf[2] - tf[1] * u + tf[0] * u2;                                  // yb
+    out[3] = T(-0.5) * ft[2] - ft[1] * u + ft[0] * u2;                                  // ybt
+    out[4] = (T(-0.5) * t4[2] - t4[1] * u + t4[0] * u2) * u;                            // xc
+    out[5] = T(-0.25) * t4[3] - T(0.75) * t4[2] * u + T(0.5) * t4[1] * u2 - T(0.5) * t4[0] * u3;  // yc
+    if constexpr (M == Moments::FTS) {
+      out[6] = T(3) * (tf[1] - tf[0] * u) * u;                                          // xg
+      out[7] = T(0.5) * tf[2];                                                          // yg
+      out[8] = T(-3) * (ft[1] - ft[0] * u) * u;                                         // xgt
+      out[9] = T(-0.5) * ft[2];                                                         // ygt
+      out[10] = T(0.25) * (-t4[3] - t4[2] * u + T(6) * t4[1] * u2 - T(6) * t4[0] * u3);  // yh = yht
+      out[11] = T(3) * (-t4[2] * u + T(2) * t4[1] * u2 - T(2) * t4[0] * u3);            // xm
+      out[12] = T(-0.5) * t4[3] + T(0.5) * t4[2] * u - T(3) * t4[1] * u2 + T(3) * t4[0] * u3;  // ym
+      out[13] = -t4[2] * u;                                                             // zm
+    }
+  }
+}
+
+std::atomic<bool> g_force_general{false};  // RealSpaceSum::force_general_tables
+
+// Four doubles, loaded without an alignment assumption (the tables are std::vector storage).
+typedef double v4u __attribute__((vector_size(32), aligned(8)));
+
+// Degree-7 polynomial at t in [-1, 1] by Estrin's scheme (three dependent multiply-adds instead of
+// Horner's seven); c[lev * stride] holds the coefficient of t^(7 - lev).
+// (Two overloads, not a template: a template argument would drop v4u's alignment attribute.)
+#define STOKESIAN_RS_ESTRIN7                                                                      \
+  const double t2 = t * t, t4 = t2 * t2;                                                          \
+  const auto q01 = c[7 * stride] + c[6 * stride] * t, q23 = c[5 * stride] + c[4 * stride] * t;  \
+  const auto q45 = c[3 * stride] + c[2 * stride] * t, q67 = c[1 * stride] + c[0 * stride] * t;  \
+  return (q01 + q23 * t2) + (q45 + q67 * t2) * t4;
+STOKESIAN_RS_INLINE double estrin7(const double* c, int stride, double t) { STOKESIAN_RS_ESTRIN7 }
+STOKESIAN_RS_INLINE v4u estrin7(const v4u* c, int stride, double t) { STOKESIAN_RS_ESTRIN7 }
+#undef STOKESIAN_RS_ESTRIN7
+
 // Smallest self mobility (of the moments in m) of a sphere of radius a.
 double self_min(double a, double mu, Moments m) {
   double s = 1.0 / (6.0 * kPi * mu * a);
@@ -228,6 +291,11 @@ void RealSpaceSum::build_table(double tolerance) {
   // Floor 2e-14: below it the tables cannot be resolved in double precision (the wave functions
   // exceed the real part they are subtracted from by orders of magnitude at short range).
   table_target_ = std::max(1e-4 * tolerance, 2e-14);
+  if (amin == amax && !g_force_general) {
+    build_direct_table();
+    return;
+  }
+  direct_ = false;
   const LD kmob = 1.0L / (8.0L * LD(kPi) * LD(mu_));
   constexpr int nodes = kCoef;
   LD tnode[nodes];
@@ -301,6 +369,76 @@ void RealSpaceSum::build_table(double tolerance) {
       throw std::runtime_error("RealSpaceSum: real-space table error " + sci(worst) + " above the target " +
                                sci(table_target_) + " with " +
                                std::to_string(nint) + " intervals");
+  }
+}
+
+void RealSpaceSum::build_direct_table() {
+  direct_ = true;
+  const double a = radius_[0];
+  r_lo_ = 2.0 * a;
+  const double r_hi = cutoff_gap_ + 2.0 * a;
+  nf_ = cached_scalars(m_);
+  stride_ = (nf_ + 3) / 4 * 4;
+  const LD kmob = 1.0L / (8.0L * LD(kPi) * LD(mu_)), A = LD(a) * LD(a);
+  // Every scalar of a separated pair (r >= 2a) is compared with the matching self mobility of the
+  // sphere: U <- F with 1 / (6 pi mu a), the others with the smallest one of the moments.
+  const double norm_f = 1.0 / (6.0 * kPi * mu_ * a), norm_o = self_min(a, mu_, m_);
+  auto exact = [&](LD r, LD* v) {
+    std::array<std::array<LD, 4>, 3> d;
+    wave_derivatives(r, LD(xi_), d);
+    LD w[12];
+    for (int k = 0; k < 4; ++k)
+      for (int j = 0; j < 3; ++j) w[3 * k + j] = kmob * d[j][k];
+    if (m_ == Moments::F) scalars_from_w<Moments::F>(w, A, A, 1.0L / r, kmob, v);
+    else if (m_ == Moments::FT) scalars_from_w<Moments::FT>(w, A, A, 1.0L / r, kmob, v);
+    else scalars_from_w<Moments::FTS>(w, A, A, 1.0L / r, kmob, v);
+  };
+  constexpr int nodes = kCoef;
+  LD T[nodes][nodes] = {};  // monomial coefficients of the Chebyshev polynomials T_0 .. T_7
+  T[0][0] = 1.0L;
+  T[1][1] = 1.0L;
+  for (int n = 1; n + 1 < nodes; ++n)
+    for (int c = 0; c < nodes; ++c) T[n + 1][c] = (c > 0 ? 2.0L * T[n][c - 1] : 0.0L) - T[n - 1][c];
+  for (int nint = 2;; nint *= 2) {
+    const double h = (r_hi - r_lo_) / nint;
+    std::vector<double> tab(std::size_t(nint) * kCoef * stride_, 0.0);
+    for (int i = 0; i < nint; ++i) {
+      LD val[nodes][14];
+      for (int q = 0; q < nodes; ++q)
+        exact(LD(r_lo_) + LD(h) * (i + 0.5L * (std::cos(LD(kPi) * (q + 0.5L) / nodes) + 1.0L)), val[q]);
+      for (int f = 0; f < nf_; ++f) {
+        LD mono[nodes] = {};
+        for (int n = 0; n < nodes; ++n) {
+          LD sum = 0.0L;
+          for (int q = 0; q < nodes; ++q) sum += val[q][f] * std::cos(LD(kPi) * n * (q + 0.5L) / nodes);
+          const LD cheb = sum * (n == 0 ? 1.0L : 2.0L) / nodes;
+          for (int c = 0; c < nodes; ++c) mono[c] += cheb * T[n][c];
+        }
+        for (int c = 0; c < nodes; ++c) tab[(std::size_t(i) * kCoef + (kCoef - 1 - c)) * stride_ + f] = double(mono[c]);
+      }
+    }
+    // Measured error on 9 points per interval (ends included), evaluated as the kernel does.
+    double worst = 0.0;
+    for (int i = 0; i < nint; ++i)
+      for (int p = 0; p <= 8; ++p) {
+        const double t = -1.0 + 0.25 * p, r = r_lo_ + h * (i + 0.5 * (t + 1.0));
+        LD v[14];
+        exact(LD(r), v);
+        for (int f = 0; f < nf_; ++f) {
+          const double got = estrin7(tab.data() + std::size_t(i) * kCoef * stride_ + f, stride_, t);
+          worst = std::max(worst, std::abs(double(LD(got) - v[f])) / (f < 2 ? norm_f : norm_o));
+        }
+      }
+    if (worst <= table_target_) {
+      intervals_ = nint;
+      inv_h_ = 1.0 / h;
+      table_ = std::move(tab);
+      table_error_ = worst;
+      return;
+    }
+    if (nint >= (1 << 14))
+      throw std::runtime_error("RealSpaceSum: real-space table error " + sci(worst) + " above the target " +
+                               sci(table_target_) + " with " + std::to_string(nint) + " intervals");
   }
 }
 
@@ -565,65 +703,6 @@ void RealSpaceSum::set_positions(const std::vector<Vec3>& x) {
   }
 }
 
-template <Moments M>
-STOKESIAN_RS_INLINE mobility::PairScalars RealSpaceSum::table_scalars(double A, double B, double r) const {
-  // Horner in 4-wide vectors over the functions (stride 8 for F, 12 otherwise).
-  typedef double v4 __attribute__((vector_size(32), aligned(8)));
-  constexpr int nv = M == Moments::F ? 2 : 3, nf = 4 * nv;
-  const double km = 1.0 / (8.0 * kPi * mu_), u = 1.0 / r;
-  const double sidx = (r - r_lo_) * inv_h_;
-  const int idx = std::min(intervals_ - 1, std::max(0, int(sidx)));
-  const double tt = 2.0 * (sidx - idx) - 1.0;
-  const v4* c = reinterpret_cast<const v4*>(table_.data() + std::size_t(idx) * kCoef * nf);
-  v4 a0 = c[0], a1 = c[1], a2 = nv > 2 ? c[nv - 1] : v4{};
-  for (int lev = 1; lev < kCoef; ++lev) {
-    a0 = a0 * tt + c[lev * nv];
-    a1 = a1 * tt + c[lev * nv + 1];
-    if constexpr (nv > 2) a2 = a2 * tt + c[lev * nv + 2];
-  }
-  const double w[12] = {a0[0], a0[1], a0[2], a0[3], a1[0], a1[1], a1[2], a1[3], a2[0], a2[1], a2[2], a2[3]};
-  // Derivatives of Psi = B0 + c1 B1 + c2 B2 with B0 = r - W0, B1 = 2 / r - W1, B2 = -W2 (times
-  // 1/(8 pi mu)); c1, c2 of the kind pair (alpha = this row, radius^2 A; beta radius^2 B).
-  const double u2 = u * u, u3 = u2 * u, AB = A * B;
-  mobility::PairScalars s;
-  {
-    const double c1 = (A + B) / 6.0, c2 = AB / 36.0;  // ff
-    const double D1 = km - w[0] + c1 * (-2.0 * km * u2 - w[1]) - c2 * w[2];
-    const double D2 = -w[3] + c1 * (4.0 * km * u3 - w[4]) - c2 * w[5];
-    s.xa = 2.0 * D1 * u;
-    s.ya = D2 + D1 * u;
-  }
-  if constexpr (M != Moments::F) {
-    const double u4 = u2 * u2, u5 = u4 * u;
-    const double b0[4] = {km - w[0], -w[3], -w[6], -w[9]};
-    const double b1[4] = {-2.0 * km * u2 - w[1], 4.0 * km * u3 - w[4], -12.0 * km * u4 - w[7], 48.0 * km * u5 - w[10]};
-    const double b2[4] = {-w[2], -w[5], -w[8], -w[11]};
-    auto derivs = [&](double c1, double c2, double* D) {
-      for (int q = 0; q < 4; ++q) D[q] = b0[q] + c1 * b1[q] + c2 * b2[q];
-    };
-    double tf[4], ft[4], t4[4];
-    derivs(A / 10.0 + B / 6.0, AB / 60.0, tf);
-    derivs(A / 6.0 + B / 10.0, AB / 60.0, ft);
-    derivs((A + B) / 10.0, AB / 100.0, t4);
-    // mobility::scalars_from_derivatives, written with u = 1/r.
-    s.yb = -0.5 * tf[2] - tf[1] * u + tf[0] * u2;
-    s.ybt = -0.5 * ft[2] - ft[1] * u + ft[0] * u2;
-    s.xc = (-0.5 * t4[2] - t4[1] * u + t4[0] * u2) * u;
-    s.yc = -0.25 * t4[3] - 0.75 * t4[2] * u + 0.5 * t4[1] * u2 - 0.5 * t4[0] * u3;
-    if constexpr (M == Moments::FTS) {
-      s.xg = 3.0 * (tf[1] - tf[0] * u) * u;
-      s.yg = 0.5 * tf[2];
-      s.xgt = -3.0 * (ft[1] - ft[0] * u) * u;
-      s.ygt = -0.5 * ft[2];
-      s.yh = s.yht = 0.25 * (-t4[3] - t4[2] * u + 6.0 * t4[1] * u2 - 6.0 * t4[0] * u3);
-      s.xm = 3.0 * (-t4[2] * u + 2.0 * t4[1] * u2 - 2.0 * t4[0] * u3);
-      s.ym = -0.5 * t4[3] + 0.5 * t4[2] * u - 3.0 * t4[1] * u2 + 3.0 * t4[0] * u3;
-      s.zm = -t4[2] * u;
-    }
-  }
-  return s;
-}
-
 namespace {
 template <Moments M>
 STOKESIAN_RS_INLINE void store(const mobility::PairScalars& s, double* c, long stride) {
@@ -671,6 +750,41 @@ STOKESIAN_RS_INLINE mobility::PairScalars load(const double* c, long stride) {
 }
 }  // namespace
 
+template <Moments M>
+STOKESIAN_RS_INLINE mobility::PairScalars RealSpaceSum::table_scalars(double A, double B, double r) const {
+  // 4-wide vectors over the functions (stride 8 for F, 12 otherwise).
+  using v4 = v4u;
+  constexpr int nv = M == Moments::F ? 2 : 3, nf = 4 * nv;
+  const double km = 1.0 / (8.0 * kPi * mu_), u = 1.0 / r;
+  const double sidx = (r - r_lo_) * inv_h_;
+  const int idx = std::min(intervals_ - 1, std::max(0, int(sidx)));
+  const double tt = 2.0 * (sidx - idx) - 1.0;
+  const v4* c = reinterpret_cast<const v4*>(table_.data() + std::size_t(idx) * kCoef * nf);
+  static_assert(kCoef == 8, "estrin7 is written for degree 7");
+  const v4 a0 = estrin7(c, nv, tt), a1 = estrin7(c + 1, nv, tt), a2 = nv > 2 ? estrin7(c + nv - 1, nv, tt) : v4{};
+  const double w[12] = {a0[0], a0[1], a0[2], a0[3], a1[0], a1[1], a1[2], a1[3], a2[0], a2[1], a2[2], a2[3]};
+  double v[14];
+  scalars_from_w<M>(w, A, B, u, km, v);
+  return load<M>(v, 1);
+}
+
+
+template <Moments M>
+STOKESIAN_RS_INLINE mobility::PairScalars RealSpaceSum::direct_scalars(double r) const {
+  using v4 = v4u;
+  constexpr int nv = M == Moments::F ? 1 : (M == Moments::FT ? 2 : 4);  // stride_ / 4
+  const double sidx = (r - r_lo_) * inv_h_;
+  const int idx = std::min(intervals_ - 1, std::max(0, int(sidx)));
+  const double tt = 2.0 * (sidx - idx) - 1.0;
+  const v4* c = reinterpret_cast<const v4*>(table_.data() + std::size_t(idx) * kCoef * (4 * nv));
+  alignas(32) double v[4 * nv];
+  for (int j = 0; j < nv; ++j) {
+    const v4 p = estrin7(c + j, nv, tt);
+    for (int q = 0; q < 4; ++q) v[4 * j + q] = p[q];
+  }
+  return load<M>(v, 1);
+}
+
 // The row kernels below are compiled twice, for the baseline x86-64 target and for AVX2 + FMA, and
 // chosen once at run time (same choice for the cache fill and the product, so cached and uncached
 // products give the same bits on a given machine).
@@ -679,6 +793,7 @@ std::atomic<bool> g_force_baseline{false};
 }
 
 void RealSpaceSum::force_baseline_kernels(bool on) { g_force_baseline = on; }
+void RealSpaceSum::force_general_tables(bool on) { g_force_general = on; }
 
 static bool use_avx2() {
 #if defined(__x86_64__) && defined(__GNUC__)
@@ -694,7 +809,7 @@ STOKESIAN_RS_INLINE void RealSpaceSum::fill_row(long k) {
   constexpr int rec = cached_scalars(M);
   for (long t = row_[k]; t < row_[k + 1]; ++t) {
     double* c = cache_.data() + t * rec;
-    store<M>(table_scalars<M>(a2s_[k], a2s_[nbr_[t]], dist_[t]), c, 1);
+    store<M>(direct_ ? direct_scalars<M>(dist_[t]) : table_scalars<M>(a2s_[k], a2s_[nbr_[t]], dist_[t]), c, 1);
   }
 }
 
@@ -714,6 +829,9 @@ STOKESIAN_RS_INLINE void RealSpaceSum::row(long k, const double* xs, double* ys)
       const double* c = cache_.data() + t * rec;
       apply_block<M>(load<M>(c, 1), ex_[t], ey_[t], ez_[t], xs + std::size_t(nbr_[t]) * d, y);
     }
+  } else if (direct_) {
+    for (long t = row_[k]; t < row_[k + 1]; ++t)
+      apply_block<M>(direct_scalars<M>(dist_[t]), ex_[t], ey_[t], ez_[t], xs + std::size_t(nbr_[t]) * d, y);
   } else {
     const double A = a2s_[k];
     for (long t = row_[k]; t < row_[k + 1]; ++t)
