@@ -7,7 +7,8 @@
 // cutoff sphere). Moments F and FTS (FT at the smaller N), tol 1e-4 and 1e-6, 1 and 2 threads.
 // Phases [s]: "build" (constructor; reference: pair list + scalars), "update" (update_positions),
 // "apply" (median product). Params: kind 0 = RealSpaceSum (scalar cache on when it fits in the default
-// 256 MB), 2 = RealSpaceSum without the cache (tables evaluated per product), 1 = reference; pairs; ns_per_pair =
+// 256 MB), 2 = RealSpaceSum without the cache (tables evaluated per product; equal radii, so the
+// tables of the pair scalars), 3 = as 2 with the general tables (force_general_tables), 1 = reference; pairs; ns_per_pair =
 // apply / pairs. The reference runs at the smaller N only (several seconds per product at N ~ 10^5).
 //   bench_pme_real [--quick] [--out DIR]      (--quick: N = 10648, phi 0.1, tol 1e-4, 50 neighbours)
 #include "bench/harness.hpp"
@@ -187,6 +188,17 @@ int main(int argc, char** argv) {
                 res.add(par, pt);
                 std::printf("  tables: build %.3f apply %.4f s = %5.1f ns/pair", pt["build"], pt["apply"],
                             1e9 * pt["apply"] / pairs);
+                // The general tables (any radii), the reference twin of the equal-radius tables above.
+                ewald::RealSpaceSum::force_general_tables(true);
+                std::map<std::string, double> pg;
+                pg["build"] = bench::time_once(
+                    [&] { tab = std::make_unique<ewald::RealSpaceSum>(x, a, dom, p.cutoff_gap, p.xi, mu, m, tol, 0); });
+                ewald::RealSpaceSum::force_general_tables(false);
+                pg["apply"] = bench::median_time([&] { tab->apply(v, y); }, opt.quick ? 3 : 1);
+                par["kind"] = 3;
+                par["ns_per_pair"] = 1e9 * pg["apply"] / pairs;
+                res.add(par, pg);
+                std::printf("  general tables: %5.1f ns/pair", 1e9 * pg["apply"] / pairs);
               }
               if (side <= 22) {
                 std::unique_ptr<Reference> ref;
