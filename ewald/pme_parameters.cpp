@@ -33,17 +33,21 @@ constexpr double kEdge = 0.065;
 // cache of real_space.hpp, RealSpaceSum::cache_bytes_for per ordered pair, within the budget);
 // window points (spread + interpolate, per particle and P^3) and transforms by timing apply_wave
 // at fixed parameters over grids 32^3-192^3 and P = 4-12 (N = 10^4, phi = 0.4).
-// Uncached pairs of equal spheres read the pair scalars from their own tables (pair_direct,
-// real_space.hpp; measured 2026-11-28 as 0.65 / 0.59 / 0.77 of the general tables' time for
-// F / FT / FTS on a slower day of the same machine, scaled to the constants here).
+// Uncached pairs of equal spheres read the pair scalars from their own tables (real_space.hpp) and
+// take 0.65 / 0.59 / 0.77 of `pair` (F / FT / FTS, measured 2026-11-28), but the model keeps
+// `pair` for them: pricing the faster pairs moved F, N = 10^6, phi 0.1, tol 1e-4 to a real space
+// 1.5x longer (cutoff gap 6.4 -> 9.7 a, grid 250^3 -> 240^3), whose pair data doubled the peak
+// memory (6.1 -> 13.2 GB) and tripled the set-up (10-12 -> 30-35 s) for no faster product
+// (4.95-5.6 s either way, 2 threads): the model prices neither memory nor, at grids of 10^7 points,
+// the memory-bound wave part (docs/benchmarks.md, "Why the PME exponent exceeds 1.1").
 struct CostConstants {
-  double pair_cached, pair, pair_direct, point;
+  double pair_cached, pair, point;
 };
 CostConstants cost_constants(Moments m) {
   switch (m) {
-    case Moments::F: return {4e-9, 18e-9, 12e-9, 2.5e-9};
-    case Moments::FT: return {10e-9, 44e-9, 26e-9, 5.0e-9};
-    default: return {32e-9, 75e-9, 58e-9, 5.5e-9};
+    case Moments::F: return {4e-9, 18e-9, 2.5e-9};
+    case Moments::FT: return {10e-9, 44e-9, 5.0e-9};
+    default: return {32e-9, 75e-9, 5.5e-9};
   }
 }
 constexpr double kFft = 0.25e-9;  // per point and log2(points), one 3D field, forward or backward
@@ -303,8 +307,7 @@ PmeParameters search(double tol, const Lattice& lattice, int n, double a_min, do
       const bool cached = RealSpaceSum::cache_bytes_for(2.0 * pairs, m) <= best.cache_bytes;
       const double setup_pairs = (kSetupParticle * n + setup_entry(m) * 2.0 * pairs) * setup_share;
       const double fixed =
-          (cached ? cc.pair_cached : (a_min == a_max ? cc.pair_direct : cc.pair)) * pairs +
-          6.0 * kFft * G * std::log2(G) + kGrid * G + setup_pairs;
+          (cached ? cc.pair_cached : cc.pair) * pairs + 6.0 * kFft * G * std::log2(G) + kGrid * G + setup_pairs;
       if (fixed >= best_cost) continue;
       double density_max = 0.0;  // grid points per unit length, largest direction
       for (int d = 0; d < 3; ++d) density_max = std::max(density_max, M[d] / len[d]);

@@ -50,7 +50,7 @@
 // only read them. Measured on one core (bench/bench_pme_real.cpp, bench/results/pme_real.json):
 // about 4 / 10 / 32 ns per pair (F / FT / FTS) with the cache, 18 / 44 / 75 without; without the
 // cache, equal radii take 0.65 / 0.59 / 0.77 of that (12.4 / 24 / 56 against 19 / 41 / 72 ns on a
-// slower day, N = 10648, phi 0.1, tol 1e-4; the cost model's pair_direct).
+// slower day, N = 10648, phi 0.1, tol 1e-4; not priced by the cost model, pme_parameters.cpp).
 #include "engine/core/domain.hpp"
 #include "engine/core/types.hpp"
 #include "engine/kernels/mobility_pair.hpp"
