@@ -142,14 +142,21 @@ typedef double v4u __attribute__((vector_size(32), aligned(8)));
 
 // Degree-7 polynomial at t in [-1, 1] by Estrin's scheme (three dependent multiply-adds instead of
 // Horner's seven); c[lev * stride] holds the coefficient of t^(7 - lev).
-// (Two overloads, not a template: a template argument would drop v4u's alignment attribute.)
+// (Two overloads, not a template: a template argument would drop v4u's alignment attribute; the
+// vector one writes through a pointer, since returning a vector by value outside the AVX2 target
+// changes the ABI.)
 #define STOKESIAN_RS_ESTRIN7                                                                      \
   const double t2 = t * t, t4 = t2 * t2;                                                          \
   const auto q01 = c[7 * stride] + c[6 * stride] * t, q23 = c[5 * stride] + c[4 * stride] * t;  \
-  const auto q45 = c[3 * stride] + c[2 * stride] * t, q67 = c[1 * stride] + c[0 * stride] * t;  \
+  const auto q45 = c[3 * stride] + c[2 * stride] * t, q67 = c[1 * stride] + c[0 * stride] * t;
+STOKESIAN_RS_INLINE double estrin7(const double* c, int stride, double t) {
+  STOKESIAN_RS_ESTRIN7
   return (q01 + q23 * t2) + (q45 + q67 * t2) * t4;
-STOKESIAN_RS_INLINE double estrin7(const double* c, int stride, double t) { STOKESIAN_RS_ESTRIN7 }
-STOKESIAN_RS_INLINE v4u estrin7(const v4u* c, int stride, double t) { STOKESIAN_RS_ESTRIN7 }
+}
+STOKESIAN_RS_INLINE void estrin7(const v4u* c, int stride, double t, v4u* out) {
+  STOKESIAN_RS_ESTRIN7
+  *out = (q01 + q23 * t2) + (q45 + q67 * t2) * t4;
+}
 #undef STOKESIAN_RS_ESTRIN7
 
 // Smallest self mobility (of the moments in m) of a sphere of radius a.
@@ -761,7 +768,10 @@ STOKESIAN_RS_INLINE mobility::PairScalars RealSpaceSum::table_scalars(double A, 
   const double tt = 2.0 * (sidx - idx) - 1.0;
   const v4* c = reinterpret_cast<const v4*>(table_.data() + std::size_t(idx) * kCoef * nf);
   static_assert(kCoef == 8, "estrin7 is written for degree 7");
-  const v4 a0 = estrin7(c, nv, tt), a1 = estrin7(c + 1, nv, tt), a2 = nv > 2 ? estrin7(c + nv - 1, nv, tt) : v4{};
+  v4 a0, a1, a2 = v4{};
+  estrin7(c, nv, tt, &a0);
+  estrin7(c + 1, nv, tt, &a1);
+  if constexpr (nv > 2) estrin7(c + nv - 1, nv, tt, &a2);
   const double w[12] = {a0[0], a0[1], a0[2], a0[3], a1[0], a1[1], a1[2], a1[3], a2[0], a2[1], a2[2], a2[3]};
   double v[14];
   scalars_from_w<M>(w, A, B, u, km, v);
@@ -779,7 +789,8 @@ STOKESIAN_RS_INLINE mobility::PairScalars RealSpaceSum::direct_scalars(double r)
   const v4* c = reinterpret_cast<const v4*>(table_.data() + std::size_t(idx) * kCoef * (4 * nv));
   alignas(32) double v[4 * nv];
   for (int j = 0; j < nv; ++j) {
-    const v4 p = estrin7(c + j, nv, tt);
+    v4 p;
+    estrin7(c + j, nv, tt, &p);
     for (int q = 0; q < 4; ++q) v[4 * j + q] = p[q];
   }
   return load<M>(v, 1);
