@@ -298,10 +298,17 @@ void RealSpaceSum::build_table(double tolerance) {
   // Floor 2e-14: below it the tables cannot be resolved in double precision (the wave functions
   // exceed the real part they are subtracted from by orders of magnitude at short range).
   table_target_ = std::max(1e-4 * tolerance, 2e-14);
-  if (amin == amax && !g_force_general) {
+  // A few distinct radii (a monodisperse or bidisperse suspension): tables of the pair scalars per
+  // pair of radius classes.
+  classes_.assign(radius_.begin(), radius_.end());
+  std::sort(classes_.begin(), classes_.end());
+  classes_.erase(std::unique(classes_.begin(), classes_.end()), classes_.end());
+  if (int(classes_.size()) <= kMaxClasses && !g_force_general) {
     build_direct_table();
     return;
   }
+  classes_.clear();
+  class_tables_.clear();
   direct_ = false;
   const LD kmob = 1.0L / (8.0L * LD(kPi) * LD(mu_));
   constexpr int nodes = kCoef;
@@ -381,72 +388,87 @@ void RealSpaceSum::build_table(double tolerance) {
 
 void RealSpaceSum::build_direct_table() {
   direct_ = true;
-  const double a = radius_[0];
-  r_lo_ = 2.0 * a;
-  const double r_hi = cutoff_gap_ + 2.0 * a;
+  const int K = int(classes_.size());
+  const double amax = classes_.back();
   nf_ = cached_scalars(m_);
   stride_ = (nf_ + 3) / 4 * 4;
-  const LD kmob = 1.0L / (8.0L * LD(kPi) * LD(mu_)), A = LD(a) * LD(a);
-  // Every scalar of a separated pair (r >= 2a) is compared with the matching self mobility of the
-  // sphere: U <- F with 1 / (6 pi mu a), the others with the smallest one of the moments.
-  const double norm_f = 1.0 / (6.0 * kPi * mu_ * a), norm_o = self_min(a, mu_, m_);
-  auto exact = [&](LD r, LD* v) {
-    std::array<std::array<LD, 4>, 3> d;
-    wave_derivatives(r, LD(xi_), d);
-    LD w[12];
-    for (int k = 0; k < 4; ++k)
-      for (int j = 0; j < 3; ++j) w[3 * k + j] = kmob * d[j][k];
-    if (m_ == Moments::F) scalars_from_w<Moments::F>(w, A, A, 1.0L / r, kmob, v);
-    else if (m_ == Moments::FT) scalars_from_w<Moments::FT>(w, A, A, 1.0L / r, kmob, v);
-    else scalars_from_w<Moments::FTS>(w, A, A, 1.0L / r, kmob, v);
-  };
+  const LD kmob = 1.0L / (8.0L * LD(kPi) * LD(mu_));
   constexpr int nodes = kCoef;
   LD T[nodes][nodes] = {};  // monomial coefficients of the Chebyshev polynomials T_0 .. T_7
   T[0][0] = 1.0L;
   T[1][1] = 1.0L;
   for (int n = 1; n + 1 < nodes; ++n)
     for (int c = 0; c < nodes; ++c) T[n + 1][c] = (c > 0 ? 2.0L * T[n][c - 1] : 0.0L) - T[n - 1][c];
-  for (int nint = 2;; nint *= 2) {
-    const double h = (r_hi - r_lo_) / nint;
-    std::vector<double> tab(std::size_t(nint) * kCoef * stride_, 0.0);
-    for (int i = 0; i < nint; ++i) {
-      LD val[nodes][14];
-      for (int q = 0; q < nodes; ++q)
-        exact(LD(r_lo_) + LD(h) * (i + 0.5L * (std::cos(LD(kPi) * (q + 0.5L) / nodes) + 1.0L)), val[q]);
-      for (int f = 0; f < nf_; ++f) {
-        LD mono[nodes] = {};
-        for (int n = 0; n < nodes; ++n) {
-          LD sum = 0.0L;
-          for (int q = 0; q < nodes; ++q) sum += val[q][f] * std::cos(LD(kPi) * n * (q + 0.5L) / nodes);
-          const LD cheb = sum * (n == 0 ? 1.0L : 2.0L) / nodes;
-          for (int c = 0; c < nodes; ++c) mono[c] += cheb * T[n][c];
+  class_tables_.assign(std::size_t(K) * K, ClassTable{});
+  table_.clear();
+  intervals_ = 0;
+  table_error_ = 0.0;
+  for (int p = 0; p < K; ++p)
+    for (int q = 0; q < K; ++q) {
+      // Row sphere of radius a_p, neighbour a_q: separated pairs lie in [a_p + a_q, cutoff_gap + a_p + a_q].
+      const LD A = LD(classes_[p]) * LD(classes_[p]), B = LD(classes_[q]) * LD(classes_[q]);
+      const double r_lo = classes_[p] + classes_[q], r_hi = cutoff_gap_ + r_lo;
+      auto exact = [&](LD r, LD* v) {
+        std::array<std::array<LD, 4>, 3> d;
+        wave_derivatives(r, LD(xi_), d);
+        LD w[12];
+        for (int k = 0; k < 4; ++k)
+          for (int j = 0; j < 3; ++j) w[3 * k + j] = kmob * d[j][k];
+        if (m_ == Moments::F) scalars_from_w<Moments::F>(w, A, B, 1.0L / r, kmob, v);
+        else if (m_ == Moments::FT) scalars_from_w<Moments::FT>(w, A, B, 1.0L / r, kmob, v);
+        else scalars_from_w<Moments::FTS>(w, A, B, 1.0L / r, kmob, v);
+      };
+      for (int nint = 2;; nint *= 2) {
+        const double h = (r_hi - r_lo) / nint;
+        std::vector<double> tab(std::size_t(nint) * kCoef * stride_, 0.0);
+        for (int i = 0; i < nint; ++i) {
+          LD val[nodes][14];
+          for (int n = 0; n < nodes; ++n)
+            exact(LD(r_lo) + LD(h) * (i + 0.5L * (std::cos(LD(kPi) * (n + 0.5L) / nodes) + 1.0L)), val[n]);
+          for (int f = 0; f < nf_; ++f) {
+            LD mono[nodes] = {};
+            for (int n = 0; n < nodes; ++n) {
+              LD sum = 0.0L;
+              for (int e = 0; e < nodes; ++e) sum += val[e][f] * std::cos(LD(kPi) * n * (e + 0.5L) / nodes);
+              const LD cheb = sum * (n == 0 ? 1.0L : 2.0L) / nodes;
+              for (int c = 0; c < nodes; ++c) mono[c] += cheb * T[n][c];
+            }
+            for (int c = 0; c < nodes; ++c) tab[(std::size_t(i) * kCoef + (kCoef - 1 - c)) * stride_ + f] = double(mono[c]);
+          }
         }
-        for (int c = 0; c < nodes; ++c) tab[(std::size_t(i) * kCoef + (kCoef - 1 - c)) * stride_ + f] = double(mono[c]);
+        // Measured error on 9 points per interval (ends included), evaluated as the kernel does. As for
+        // the general tables, each scalar is compared with the matching self mobility of a sphere of
+        // radius rho = min(a_max, r/2): U <- F with 1 / (6 pi mu rho), the others with the smallest
+        // one of the moments.
+        double worst = 0.0;
+        for (int i = 0; i < nint; ++i)
+          for (int e = 0; e <= 8; ++e) {
+            const double t = -1.0 + 0.25 * e, r = r_lo + h * (i + 0.5 * (t + 1.0));
+            const double rho = std::min(amax, 0.5 * r);
+            const double norm_f = 1.0 / (6.0 * kPi * mu_ * rho), norm_o = self_min(rho, mu_, m_);
+            LD v[14];
+            exact(LD(r), v);
+            for (int f = 0; f < nf_; ++f) {
+              const double got = estrin7(tab.data() + std::size_t(i) * kCoef * stride_ + f, stride_, t);
+              worst = std::max(worst, std::abs(double(LD(got) - v[f])) / (f < 2 ? norm_f : norm_o));
+            }
+          }
+        if (worst <= table_target_) {
+          ClassTable& ct = class_tables_[std::size_t(p) * K + q];
+          ct.r_lo = r_lo;
+          ct.inv_h = 1.0 / h;
+          ct.intervals = nint;
+          ct.offset = table_.size();
+          table_.insert(table_.end(), tab.begin(), tab.end());
+          intervals_ = std::max(intervals_, nint);
+          table_error_ = std::max(table_error_, worst);
+          break;
+        }
+        if (nint >= (1 << 14))
+          throw std::runtime_error("RealSpaceSum: real-space table error " + sci(worst) + " above the target " +
+                                   sci(table_target_) + " with " + std::to_string(nint) + " intervals");
       }
     }
-    // Measured error on 9 points per interval (ends included), evaluated as the kernel does.
-    double worst = 0.0;
-    for (int i = 0; i < nint; ++i)
-      for (int p = 0; p <= 8; ++p) {
-        const double t = -1.0 + 0.25 * p, r = r_lo_ + h * (i + 0.5 * (t + 1.0));
-        LD v[14];
-        exact(LD(r), v);
-        for (int f = 0; f < nf_; ++f) {
-          const double got = estrin7(tab.data() + std::size_t(i) * kCoef * stride_ + f, stride_, t);
-          worst = std::max(worst, std::abs(double(LD(got) - v[f])) / (f < 2 ? norm_f : norm_o));
-        }
-      }
-    if (worst <= table_target_) {
-      intervals_ = nint;
-      inv_h_ = 1.0 / h;
-      table_ = std::move(tab);
-      table_error_ = worst;
-      return;
-    }
-    if (nint >= (1 << 14))
-      throw std::runtime_error("RealSpaceSum: real-space table error " + sci(worst) + " above the target " +
-                               sci(table_target_) + " with " + std::to_string(nint) + " intervals");
-  }
 }
 
 void RealSpaceSum::update_positions(const std::vector<Vec3>& x) {
@@ -525,6 +547,7 @@ void RealSpaceSum::set_positions(const std::vector<Vec3>& x) {
   const bool pretest = nc[0] > 2 * sub && nc[1] > 2 * sub && nc[2] > 2 * sub;
   const double slack = 1e-9 * (L.maxCoeff() + range);  // far above the rounding of A s
   a2s_.resize(N);
+  cls_.resize(direct_ ? N : 0);
   self_f_.resize(N);
   self_t_.resize(N);
   self_s_.resize(N);
@@ -532,6 +555,8 @@ void RealSpaceSum::set_positions(const std::vector<Vec3>& x) {
     xs[k] = x[order_[k]];
     as[k] = radius_[order_[k]];
     a2s_[k] = as[k] * as[k];
+    if (direct_)
+      cls_[k] = std::uint8_t(std::lower_bound(classes_.begin(), classes_.end(), as[k]) - classes_.begin());
     self_f_[k] = self0_[3 * order_[k]];
     self_t_[k] = self0_[3 * order_[k] + 1];
     self_s_[k] = self0_[3 * order_[k] + 2];
@@ -780,13 +805,13 @@ STOKESIAN_RS_INLINE mobility::PairScalars RealSpaceSum::table_scalars(double A, 
 
 
 template <Moments M>
-STOKESIAN_RS_INLINE mobility::PairScalars RealSpaceSum::direct_scalars(double r) const {
+STOKESIAN_RS_INLINE mobility::PairScalars RealSpaceSum::direct_scalars(const ClassTable& ct, double r) const {
   using v4 = v4u;
   constexpr int nv = M == Moments::F ? 1 : (M == Moments::FT ? 2 : 4);  // stride_ / 4
-  const double sidx = (r - r_lo_) * inv_h_;
-  const int idx = std::min(intervals_ - 1, std::max(0, int(sidx)));
+  const double sidx = (r - ct.r_lo) * ct.inv_h;
+  const int idx = std::min(ct.intervals - 1, std::max(0, int(sidx)));
   const double tt = 2.0 * (sidx - idx) - 1.0;
-  const v4* c = reinterpret_cast<const v4*>(table_.data() + std::size_t(idx) * kCoef * (4 * nv));
+  const v4* c = reinterpret_cast<const v4*>(table_.data() + ct.offset + std::size_t(idx) * kCoef * (4 * nv));
   alignas(32) double v[4 * nv];
   for (int j = 0; j < nv; ++j) {
     v4 p;
@@ -820,7 +845,9 @@ STOKESIAN_RS_INLINE void RealSpaceSum::fill_row(long k) {
   constexpr int rec = cached_scalars(M);
   for (long t = row_[k]; t < row_[k + 1]; ++t) {
     double* c = cache_.data() + t * rec;
-    store<M>(direct_ ? direct_scalars<M>(dist_[t]) : table_scalars<M>(a2s_[k], a2s_[nbr_[t]], dist_[t]), c, 1);
+    store<M>(direct_ ? direct_scalars<M>(class_tables_[cls_[k] * classes_.size() + cls_[nbr_[t]]], dist_[t])
+                     : table_scalars<M>(a2s_[k], a2s_[nbr_[t]], dist_[t]),
+             c, 1);
   }
 }
 
@@ -840,9 +867,15 @@ STOKESIAN_RS_INLINE void RealSpaceSum::row(long k, const double* xs, double* ys)
       const double* c = cache_.data() + t * rec;
       apply_block<M>(load<M>(c, 1), ex_[t], ey_[t], ez_[t], xs + std::size_t(nbr_[t]) * d, y);
     }
-  } else if (direct_) {
+  } else if (direct_ && classes_.size() == 1) {
+    const ClassTable& ct = class_tables_[0];
     for (long t = row_[k]; t < row_[k + 1]; ++t)
-      apply_block<M>(direct_scalars<M>(dist_[t]), ex_[t], ey_[t], ez_[t], xs + std::size_t(nbr_[t]) * d, y);
+      apply_block<M>(direct_scalars<M>(ct, dist_[t]), ex_[t], ey_[t], ez_[t], xs + std::size_t(nbr_[t]) * d, y);
+  } else if (direct_) {
+    const ClassTable* ct = class_tables_.data() + cls_[k] * classes_.size();
+    for (long t = row_[k]; t < row_[k + 1]; ++t)
+      apply_block<M>(direct_scalars<M>(ct[cls_[nbr_[t]]], dist_[t]), ex_[t], ey_[t], ez_[t],
+                     xs + std::size_t(nbr_[t]) * d, y);
   } else {
     const double A = a2s_[k];
     for (long t = row_[k]; t < row_[k + 1]; ++t)

@@ -16,10 +16,11 @@
 // functions of r (no singularity, scale 1/xi), so they are tabulated on [r_lo, r_hi] =
 // [2 a_min, cutoff_gap + 2 a_max] as piecewise polynomials of degree 7 (Chebyshev interpolation in
 // each interval, stored as monomials in the local variable t in [-1, 1]); the free part r + 2 c1/r is
-// evaluated exactly. Equal radii (a monodisperse suspension): the table holds the 2 / 6 / 14 pair
-// scalars themselves instead (same degree, nodes and accuracy rule, compared with their long-double
-// values from the same closed forms), so an entry costs one polynomial vector per four scalars and
-// no combination; the general tables are its reference twin (force_general_tables). Polynomials are
+// evaluated exactly. At most four distinct radii (mono- to tetradisperse suspensions): one table
+// per ordered pair of radii holds the 2 / 6 / 14 pair scalars themselves instead, on
+// [a_p + a_q, cutoff_gap + a_p + a_q] (same degree, nodes and accuracy rule, compared with their
+// long-double values from the same closed forms), so an entry costs one polynomial vector per four
+// scalars and no combination; the general tables are its reference twin (force_general_tables). Polynomials are
 // evaluated by Estrin's scheme. Overlapping and nested pairs (r < a_a + a_b) keep the exact
 // real_scalars, computed once per position update.
 //
@@ -32,10 +33,10 @@
 // separated pair at distance r has a_a + a_b <= r, so c1 <= min(r^2, 2 a_max^2)/6,
 // c2 <= rho^4/36, and its smaller sphere has radius <= rho) times the largest multiplier of d_k in
 // the scalars (mobility::scalars_from_derivatives). table_error() returns the measured bound in
-// units of that self mobility (equal radii: every scalar's error is measured directly against that
-// bound). Summed over the neighbours of a particle these errors stay orders of magnitude below tol
+// units of that self mobility (per-class tables: every scalar's error is measured directly against
+// that bound). Summed over the neighbours of a particle these errors stay orders of magnitude below tol
 // (tests/test_ewald_real.cpp: relative 2-norm error <= 1e-3 tol required, at most 5.2e-5 tol
-// measured; the equal-radius and general tables agree to 1e-3 tol from 1e-2 to 1e-10).
+// measured; the per-class and general tables agree to 1e-3 tol from 1e-2 to 1e-10).
 //
 // Speed. Particles are binned in cells over fractional coordinates (Lees-Edwards aware, as
 // trees/neighbor_list.hpp; cells of width >= range / 2 with a 5-cell stencil when the box allows)
@@ -49,13 +50,14 @@
 // (default 256 MB: 16, 48 or 112 bytes per ordered pair for F, FT, FTS); repeated products then
 // only read them. Measured on one core (bench/bench_pme_real.cpp, bench/results/pme_real.json):
 // about 4 / 10 / 32 ns per pair (F / FT / FTS) with the cache, 18 / 44 / 75 without; without the
-// cache, equal radii take 0.65 / 0.59 / 0.77 of that (12.4 / 24 / 56 against 19 / 41 / 72 ns on a
+// cache, equal radii (per-class tables) take 0.65 / 0.59 / 0.77 of that (12.4 / 24 / 56 against 19 / 41 / 72 ns on a
 // slower day, N = 10648, phi 0.1, tol 1e-4; not priced by the cost model, pme_parameters.cpp).
 #include "engine/core/domain.hpp"
 #include "engine/core/types.hpp"
 #include "engine/kernels/mobility_pair.hpp"
 
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 namespace stokesian::ewald {
@@ -100,8 +102,8 @@ class RealSpaceSum {
   // The row kernels exist for the baseline x86-64 target and for AVX2 + FMA (chosen at run time
   // when the CPU has them); true forces the baseline ones in every object (for tests).
   static void force_baseline_kernels(bool on);
-  // true: objects built afterwards use the general tables even for equal radii (the reference twin
-  // of the monodisperse tables, for tests and benchmarks).
+  // true: objects built afterwards use the general tables even for a few distinct radii (the
+  // reference twin of the per-class tables, for tests and benchmarks).
   static void force_general_tables(bool on);
   bool direct_tables() const { return direct_; }
   // Cell order: order()[k] = original index of the k-th particle in the sorted (cell by cell) order.
@@ -110,8 +112,13 @@ class RealSpaceSum {
  private:
   void build_table(double tolerance);
   void build_direct_table();
+  struct ClassTable {  // pair scalars of one (row radius, neighbour radius) class pair
+    double r_lo = 0.0, inv_h = 0.0;
+    int intervals = 0;
+    std::size_t offset = 0;  // in table_
+  };
   template <Moments M>
-  mobility::PairScalars direct_scalars(double r) const;
+  mobility::PairScalars direct_scalars(const ClassTable& ct, double r) const;
   void set_positions(const std::vector<Vec3>& x);
   template <Moments M>
   void apply_rows(const double* xs, double* ys) const;
@@ -143,10 +150,16 @@ class RealSpaceSum {
   // power first) of nf_ functions (k-major: d1 W0, d1 W1, d1 W2, d2 W0, ...; stored with stride_,
   // zero padded), already times 1/(8 pi mu).
   static constexpr int kCoef = 8;
-  // Equal radii (direct_): the table holds the pair scalars themselves (record order of the cache,
-  // stride 4 / 8 / 16).
+  // At most kMaxClasses distinct radii (direct_): one table of the pair scalars themselves (record
+  // order of the cache, stride 4 / 8 / 16) per ordered pair of radius classes, class_tables_[p K + q]
+  // for a row sphere of radius classes_[p] and a neighbour of radius classes_[q]; cls_ = class of
+  // each sorted particle. intervals_ is then the largest interval count of the tables.
+  static constexpr int kMaxClasses = 4;
   int intervals_ = 0, nf_ = 0, stride_ = 0;  // functions used, functions stored per level
   bool direct_ = false;
+  std::vector<double> classes_;
+  std::vector<ClassTable> class_tables_;
+  std::vector<std::uint8_t> cls_;
   double r_lo_ = 0.0, inv_h_ = 0.0;
   std::vector<double> table_;
   double table_error_ = 0.0, table_target_ = 0.0;

@@ -126,26 +126,38 @@ TEST_CASE("real space: fast sum equals the plain reference (tol 1e-3, 1e-6, 1e-1
         CAPTURE(tol);
         CAPTURE(to_string(m));
         CHECK(fast.pairs() == npairs);
-        CHECK(fast.direct_tables() == (*amin == *amax));
+        CHECK(fast.direct_tables() == (*amin == *amax));  // the poly cases have 500 distinct radii
         CHECK(fast.table_error() <= fast.table_target());
         CHECK(err <= 1e-3 * tol);
       }
   }
 }
 
-// Equal radii read the pair scalars from their own tables (real_space.hpp); the general tables are
-// their reference twin. Both are built to the same per-scalar bound, so the products agree to
+// A few distinct radii (at most 4) read the pair scalars from tables per pair of radii
+// (real_space.hpp); the general tables are their reference twin. Both are built to the same per-scalar bound, so the products agree to
 // 1e-3 tol (the contract against the exact sum), checked from tol 1e-2 to 1e-12 (below 1e-11 the
 // tables stop at their floor of 2e-14 per scalar, so the bound is then 1e-14), open cube and
 // sheared box, cached and uncached.
-TEST_CASE("real space: the equal-radius tables agree with the general ones (tol 1e-2 ... 1e-12; F, FT, FTS)") {
+// Radii drawn from `values` (each sphere uniformly), other fields as make_case.
+Case with_radii(Case c, const std::vector<double>& values, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_int_distribution<std::size_t> pick(0, values.size() - 1);
+  for (double& a : c.a) a = values[pick(rng)];
+  return c;
+}
+
+TEST_CASE("real space: the per-radius-class tables agree with the general ones (tol 1e-2 ... 1e-12; F, FT, FTS)") {
   const double mu = 1.3;
   for (const Case& c : {make_case("mono phi 0.3", 400, 0.3, 1.0, 1.0, Vec3(1, 1, 1), 0.0, 21),
-                        make_case("mono a 0.5 LE 0.4", 400, 0.15, 0.5, 0.5, Vec3(1.1, 1.0, 0.9), 0.4, 22)}) {
+                        make_case("mono a 0.5 LE 0.4", 400, 0.15, 0.5, 0.5, Vec3(1.1, 1.0, 0.9), 0.4, 22),
+                        with_radii(make_case("bi 1 : 2.5", 400, 0.08, 1.0, 1.0, Vec3(1, 1, 1), 0.0, 23), {1.0, 2.5}, 24),
+                        with_radii(make_case("four radii LE 0.3", 400, 0.06, 1.0, 1.0, Vec3(1, 1.2, 1), 0.3, 25),
+                                   {0.4, 1.0, 1.7, 3.0}, 26)}) {
     const ewald::Lattice lat = ewald::Lattice::from_domain(c.domain);
+    const auto [amin, amax] = std::minmax_element(c.a.begin(), c.a.end());
     for (double tol : {1e-2, 1e-4, 1e-6, 1e-8, 1e-10, 1e-12})
       for (Moments m : {Moments::F, Moments::FT, Moments::FTS}) {
-        const ewald::PmeParameters p = ewald::pme_parameters(tol, lat, int(c.x.size()), c.a[0], c.a[0], m, options());
+        const ewald::PmeParameters p = ewald::pme_parameters(tol, lat, int(c.x.size()), *amin, *amax, m, options());
         const VecX in = random_vector(long(c.x.size()) * dof_per_particle(m), 17);
         ewald::RealSpaceSum::force_general_tables(true);
         const ewald::RealSpaceSum general(c.x, c.a, c.domain, p.cutoff_gap, p.xi, mu, m, tol, 0);
@@ -157,7 +169,7 @@ TEST_CASE("real space: the equal-radius tables agree with the general ones (tol 
         direct.apply(in, yd);
         direct_cached.apply(in, yc);
         const double diff = (yd - yg).norm() / yg.norm();
-        std::printf("%-18s tol %.0e %-3s intervals %5d / %5d (equal radii / general), table %.1e / %.1e, |diff| %.1e\n",
+        std::printf("%-18s tol %.0e %-3s intervals %5d / %5d (per class / general), table %.1e / %.1e, |diff| %.1e\n",
                     c.name.c_str(), tol, to_string(m), direct.table_intervals(), general.table_intervals(),
                     direct.table_error(), general.table_error(), diff);
         CAPTURE(c.name);
@@ -175,7 +187,8 @@ TEST_CASE("real space: the equal-radius tables agree with the general ones (tol 
 
 TEST_CASE("real space: bitwise independent of the thread count and of the scalar cache; update_positions equals a new build") {
   for (const Case& c : {make_case("poly LE", 800, 0.3, 0.3, 1.5, Vec3(1.0, 1.0, 1.2), 0.37, 9),
-                        make_case("mono LE", 800, 0.3, 1.0, 1.0, Vec3(1.0, 1.0, 1.2), 0.37, 10)}) {
+                        make_case("mono LE", 800, 0.3, 1.0, 1.0, Vec3(1.0, 1.0, 1.2), 0.37, 10),
+                        with_radii(make_case("bi LE", 800, 0.3, 1.0, 1.0, Vec3(1.0, 1.0, 1.2), 0.37, 11), {0.6, 1.4}, 12)}) {
   CAPTURE(c.name);
   const ewald::Lattice lat = ewald::Lattice::from_domain(c.domain);
   const double tol = 1e-6;
