@@ -33,8 +33,9 @@ constexpr double kEdge = 0.065;
 // cache of real_space.hpp, RealSpaceSum::cache_bytes_for per ordered pair, within the budget);
 // window points (spread + interpolate, per particle and P^3) and transforms by timing apply_wave
 // at fixed parameters over grids 32^3-192^3 and P = 4-12 (N = 10^4, phi = 0.4).
-// Uncached pairs of equal spheres read the pair scalars from their own tables (real_space.hpp) and
-// take 0.65 / 0.59 / 0.77 of `pair` (F / FT / FTS, measured 2026-11-28), but the model keeps
+// Uncached pairs read the pair scalars from tables per pair of radii when there are at most four
+// distinct radii (real_space.hpp); equal spheres then take 0.65 / 0.59 / 0.77 of `pair` (F / FT /
+// FTS, measured 2026-11-28), but the model keeps
 // `pair` for them: pricing the faster pairs moved F, N = 10^6, phi 0.1, tol 1e-4 to a real space
 // 1.5x longer (cutoff gap 6.4 -> 9.7 a, grid 250^3 -> 240^3), whose pair data doubled the peak
 // memory (6.1 -> 13.2 GB) and tripled the set-up (10-12 -> 30-35 s) for no faster product
