@@ -52,6 +52,10 @@
 // about 4 / 10 / 32 ns per pair (F / FT / FTS) with the cache, 18 / 44 / 75 without; without the
 // cache, equal radii (per-class tables) take 0.65 / 0.59 / 0.77 of that (12.4 / 24 / 56 against 19 / 41 / 72 ns on a
 // slower day, N = 10648, phi 0.1, tol 1e-4; not priced by the cost model, pme_parameters.cpp).
+// The per-class tables cost more to build (FTS, one thread: one radius 0.008 / 0.056 s at tol
+// 1e-4 / 1e-12, two radii 0.07 / 0.30 s, four radii 0.12 / 0.59 s, against 0.003-0.044 s for the
+// general tables); they are built by the constructor only (PmeFarField::build: new particles, radii
+// or box), never by update_positions.
 #include "engine/core/domain.hpp"
 #include "engine/core/types.hpp"
 #include "engine/kernels/mobility_pair.hpp"
