@@ -20,8 +20,13 @@
 
 namespace stokesian::ewald {
 
-// out (size N d) is overwritten; grid as in spread.hpp (3 fields, ghost points filled).
+// out (size N d) is overwritten; grid as in spread.hpp (3 fields, ghost points filled). Runs the fast
+// kernels of spread_fast.cpp or the generic loops (spread.hpp: GridKernels).
 void interpolate(const GridGeometry& g, const ParticleWindows& win, const SlabColouring& colouring, Moments m,
                  const double* grid, VecX& out);
+
+// A particle's responses y (U, then Omega and E as m has them) from o[c][0] = U_c and
+// o[c][1 + e] = Dd_ec, the delta-gradient sums (D = J^T Dd).
+void responses_from_gradient(const GridGeometry& g, Moments m, const double (*o)[4], double* y);
 
 }  // namespace stokesian::ewald

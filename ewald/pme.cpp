@@ -91,7 +91,7 @@ void PmeFarField::build(const std::vector<Vec3>& x, const std::vector<double>& a
   grid_.M = p_.grid;
   grid_.P = p_.support;
   grid_.set_window(Window1D(p_.window, p_.support, p_.shape));
-  grid_.row = (grid_.M[2] + grid_.P + 3) / 4 * 4;
+  grid_.row = row_length(grid_.M[2], grid_.P);
   set_lattice();
   radius_ = a;
   set_windows(x);
@@ -175,11 +175,11 @@ void PmeFarField::apply_wave(const VecX& in, VecX& out) const {
     fftw_execute_dft_c2r(f.plane_c2r, spec + c * f.nspec + i0 * plane_spec, f.real + c * stored + i0 * plane_real);
   }
   // Ghost points of every direction-2 row: the periodic copies of its start.
-  const int ghosts = grid_.P - 1;
+  const int ghosts = grid_.row - M2;
 #pragma omp parallel for schedule(static)
   for (long r = 0; r < 3L * M0 * M1; ++r) {
     double* v = f.real + r * grid_.row;
-    for (int l = 0; l < ghosts; ++l) v[M2 + l] = v[l];
+    for (int l = 0; l < ghosts; ++l) v[M2 + l] = v[l % M2];
   }
   interpolate(grid_, windows_, colouring_, m_, f.real, out);
 }

@@ -56,8 +56,6 @@ void row_weights(const GridGeometry& g, const ParticleWindows& win, long p, int 
   }
 }
 
-namespace {
-// Q J^T of particle p (spread.hpp): maps the delta-gradient of W^T to the force density.
 Mat3 source_matrix(const GridGeometry& g, Moments m, const double* q) {
   Mat3 Q = Mat3::Zero();
   if (m == Moments::F) return Q;
@@ -70,6 +68,7 @@ Mat3 source_matrix(const GridGeometry& g, Moments m, const double* q) {
   return Q * g.J.transpose();
 }
 
+namespace {
 void spread_particle(const GridGeometry& g, const ParticleWindows& win, long p, Moments m, const double* q,
                      double* grid) {
   const int P = g.P;
@@ -97,19 +96,26 @@ void spread(const GridGeometry& g, const ParticleWindows& win, const SlabColouri
   const long stored = g.stored();
   std::memset(grid, 0, sizeof(double) * stored * 3);
   const int phases = colouring.slabs >= 2 ? 2 : 1;
+  const GridKernelFn fast = spread_kernel_for(g, m);
   for (int phase = 0; phase < phases; ++phase) {
 #pragma omp parallel for schedule(dynamic, 1)
-    for (int slab = phase; slab < colouring.slabs; slab += phases)
+    for (int slab = phase; slab < colouring.slabs; slab += phases) {
+      if (fast) {
+        fast(g, win, colouring.members[slab], m, in.data(), grid);
+        continue;
+      }
       for (long p : colouring.members[slab]) spread_particle(g, win, p, m, in.data() + p * d, grid);
+    }
   }
-  // Fold the ghost points of every direction-2 row back onto its start.
+  // Fold the ghost points of every direction-2 row back onto its start (in order, so a row shorter
+  // than its ghost region folds twice onto the same points deterministically).
   const long rows = long(g.M[0]) * g.M[1];
-  const int M2 = g.M[2], ghosts = g.P - 1;
+  const int M2 = g.M[2], ghosts = g.row - M2;
 #pragma omp parallel for schedule(static)
   for (long r = 0; r < 3 * rows; ++r) {
     double* v = grid + r * g.row;
     for (int l = 0; l < ghosts; ++l) {
-      v[l] += v[M2 + l];
+      v[l % M2] += v[M2 + l];
       v[M2 + l] = 0.0;
     }
   }

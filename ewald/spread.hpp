@@ -12,9 +12,12 @@
 // Weights per direction-2 row (j0, j1 fixed): W^F = f0 c0 + f1 c1 + f2 c2 and each delta-derivative
 // of W^T = t0 c0 + .. + t3 c3 with c_k = phi^(k) along direction 2 and coefficients from the other
 // two directions: separable evaluation, P^2 coefficient sets and P^3 multiply-adds per field.
-// Layout: each field is M0 x M1 rows of `row` = M2 + P doubles; a window never wraps along
-// direction 2 but runs into the P - 1 ghost points after M2, which are folded back after spreading
+// Layout: each field is M0 x M1 rows of `row` doubles (row_length, window.hpp); a window never wraps
+// along direction 2 but runs into the ghost points after M2, which are folded back after spreading
 // (and filled from the periodic values before interpolating), so the innermost loops are contiguous.
+// Two implementations: the loops below (row weights formed per row, any support; the generic path)
+// and the fast kernels of spread_fast.cpp (supports up to kMaxFastSupport, the default), which
+// agree to rounding.
 // Write conflicts (OpenMP): the grid is cut along direction 0 into an even number of slabs at least P
 // points wide; a particle belongs to the slab of its first window index, so its window touches only
 // its slab and the next. Slabs of one parity never touch each other's targets: all even slabs are
@@ -37,6 +40,24 @@ SlabColouring colour_slabs(const GridGeometry& g, const ParticleWindows& win);
 // gd[3][l] (only wF when with_gradient is false). l = 0..P-1 along direction 2.
 void row_weights(const GridGeometry& g, const ParticleWindows& win, long p, int j0, int j1, bool with_gradient,
                  double* wF, double (*gd)[64]);
+
+// Q J^T of a particle with moments q (F: zero): maps the delta-gradient of W^T to the force density.
+Mat3 source_matrix(const GridGeometry& g, Moments m, const double* q);
+
+// Which spreading and interpolation loops run (tests compare them): automatic = the fast kernels
+// with AVX2 + FMA when the CPU has them, baseline = the fast kernels without AVX2, generic = the
+// loops of spread.cpp and interpolate.cpp for every support. Supports above kMaxFastSupport always
+// take the generic loops. Process-wide; not to be changed while a product runs.
+enum class GridKernels { automatic, baseline, generic };
+void force_grid_kernels(GridKernels k);
+constexpr int kMaxFastSupport = 32;
+// A fast kernel over a list of particles: spreading (in = moments, out = grid, accumulated) or
+// interpolation (in = grid, out = responses, overwritten per listed particle); null when the
+// generic loops must run.
+using GridKernelFn = void (*)(const GridGeometry&, const ParticleWindows&, const std::vector<long>&, Moments,
+                              const double* in, double* out);
+GridKernelFn spread_kernel_for(const GridGeometry& g, Moments m);
+GridKernelFn interpolate_kernel_for(const GridGeometry& g, Moments m);
 
 // grid: 3 fields of g.stored() doubles each (field c at grid + c * g.stored()); overwritten,
 // ghost points folded. `in` has dof_per_particle(m) values per particle, [F(3) T(3) S(5)].

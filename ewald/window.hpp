@@ -86,6 +86,13 @@ class WindowTable {
   std::vector<double> c_;  // [d][power D..0][j]
 };
 
+// Support rounded up to whole 4-double vectors (the fast spreading and interpolation loops,
+// spread_fast.cpp), and the stored length of a direction-2 row of M2 points: room for the
+// padded_support - 1 ghost points a window starting at M2 - 1 reaches, rounded to a multiple of 4
+// doubles so that every row starts 32-byte aligned when the field does.
+inline int padded_support(int P) { return (P + 3) / 4 * 4; }
+inline int row_length(int M2, int P) { return (M2 + padded_support(P) + 3) / 4 * 4; }
+
 struct GridGeometry {
   std::array<int, 3> M{};      // grid points per lattice direction
   int P = 4;                   // support (points per direction)
@@ -97,7 +104,8 @@ struct GridGeometry {
   }
   Mat3 J = Mat3::Identity();   // diag(M) A^{-1}
   Mat3 lap = Mat3::Zero();     // Gt = J J^T
-  int row = 0;                 // stored length of a direction-2 row: M2 + P (ghost points, spread.hpp)
+  int row = 0;                 // stored length of a direction-2 row (ghost points, spread.hpp): row_length
+
   long points() const { return long(M[0]) * M[1] * M[2]; }
   long stored() const { return long(M[0]) * M[1] * row; }
 };

@@ -513,117 +513,208 @@ TEST_CASE("PME window table: the polynomial form equals the window's series over
   CHECK(worst <= 2.0 * ewald::WindowTable::kFitError);
 }
 
-TEST_CASE("PME spreading and interpolation: separable fast path equals a plain point-by-point sum") {
-  // Reference: for every particle and every grid point of its window, W, grad W and lap W from the
-  // 1D derivatives directly (no row coefficients, no ghost points), accumulated on an unpadded grid.
+// Grid, windows and colouring of a small sheared box with support P (Kaiser-Bessel, beta = 2.3 P).
+namespace {
+struct SmallGrid {
   ewald::GridGeometry g;
-  g.M = {12, 10, 14};
-  g.P = 6;
-  g.set_window(ewald::Window1D(ewald::WindowKind::kaiser_bessel, g.P, 14.0));
+  Config c;
+  std::vector<Vec3> s;
+  ewald::ParticleWindows win;
+  ewald::SlabColouring colouring;
+};
+SmallGrid small_grid(int P, std::array<int, 3> M, int n, unsigned seed) {
+  SmallGrid r;
+  ewald::GridGeometry& g = r.g;
+  g.M = M;
+  g.P = P;
+  g.set_window(ewald::Window1D(ewald::WindowKind::kaiser_bessel, g.P, 2.3 * P));
   const Domain dom = box(Vec3(9.0, 8.0, 10.0), 0.3);
   const ewald::Lattice lat = ewald::Lattice::from_domain(dom);
   for (int d = 0; d < 3; ++d) g.J.row(d) = g.M[d] * lat.Ainv.row(d);
   g.lap = g.J * g.J.transpose();
-  g.row = (g.M[2] + g.P + 3) / 4 * 4;
-  const Config c = random_config(7, Vec3(9.0, 8.0, 10.0), 0.5, 1.5, 77);
-  std::vector<Vec3> s;
-  for (const Vec3& x : c.x) s.push_back(lat.Ainv * x);
-  const ewald::ParticleWindows win = ewald::make_windows(g, s, c.a);
-  // The windows from the table equal the series at the particles' offsets (WindowTable::kFitError of
-  // each derivative's largest value).
-  std::array<double, 4> wscale{};
-  for (int i = 0; i <= 64 * g.P; ++i) {
-    double v[4];
-    g.window.derivatives(-0.5 * g.P + i / 64.0, v);
-    for (int k = 0; k < 4; ++k) wscale[k] = std::max(wscale[k], std::abs(v[k]));
-  }
-  for (long p = 0; p < 7; ++p)
-    for (int dir = 0; dir < 3; ++dir) {
-      const double pos = (s[p][dir] - std::floor(s[p][dir])) * g.M[dir];
-      const int i0 = int(std::ceil(pos - 0.5 * g.P));
-      CHECK(win.start[p][dir] == ((i0 % g.M[dir]) + g.M[dir]) % g.M[dir]);
-      for (int j = 0; j < g.P; ++j) {
-        double v[4];
-        g.window.derivatives((i0 + j) - pos, v);
-        for (int k = 0; k < 4; ++k) CHECK(std::abs(win.at(p, dir, k)[j] - v[k]) <= ewald::WindowTable::kFitError * wscale[k]);
+  g.row = ewald::row_length(g.M[2], g.P);
+  r.c = random_config(n, Vec3(9.0, 8.0, 10.0), 0.5, 1.5, seed);
+  for (const Vec3& x : r.c.x) r.s.push_back(lat.Ainv * x);
+  r.win = ewald::make_windows(g, r.s, r.c.a);
+  r.colouring = ewald::colour_slabs(g, r.win);
+  return r;
+}
+// Grid fields with ghost points filled from the periodic values, from an unpadded velocity field.
+std::vector<double> padded_field(const ewald::GridGeometry& g, const VecX& u) {
+  std::vector<double> padded(g.stored() * 3, 0.0);
+  for (int a = 0; a < 3; ++a)
+    for (int i0 = 0; i0 < g.M[0]; ++i0)
+      for (int i1 = 0; i1 < g.M[1]; ++i1)
+        for (int i2 = 0; i2 < g.row; ++i2)
+          padded[a * g.stored() + ewald::grid_offset(g, i0, i1, i2)] =
+              u[a * g.points() + (long(i0) * g.M[1] + i1) * g.M[2] + i2 % g.M[2]];
+  return padded;
+}
+}  // namespace
+
+TEST_CASE("PME spreading and interpolation: fast kernels and generic loops against a plain point-by-point sum") {
+  // Reference: for every particle and every grid point of its window, W, grad W and lap W from the
+  // 1D derivatives directly (no row coefficients, no ghost points), accumulated on an unpadded grid.
+  // Checked for every path (fast kernels with AVX2 where the CPU has it, fast kernels on the
+  // baseline ISA, generic loops) and supports P = 3 ... 13 and 31 ... 34, which cover every padded
+  // width of the fast kernels' partial vectors and the switch to the generic loops above 32.
+  int cases = 0;
+  for (int P : {3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 31, 32, 33, 34}) {
+    CAPTURE(P);
+    const int big = std::max(P + 2, 12);
+    SmallGrid sg = small_grid(P, {big, big - 2 + (P % 2), big + 2}, 7, 77);
+    const ewald::GridGeometry& g = sg.g;
+    const std::vector<Vec3>& s = sg.s;
+    ++cases;
+    const ewald::ParticleWindows& win = sg.win;
+    // The windows from the table equal the series at the particles' offsets (WindowTable::kFitError of
+    // each derivative's largest value).
+    std::array<double, 4> wscale{};
+    for (int i = 0; i <= 64 * g.P; ++i) {
+      double v[4];
+      g.window.derivatives(-0.5 * g.P + i / 64.0, v);
+      for (int k = 0; k < 4; ++k) wscale[k] = std::max(wscale[k], std::abs(v[k]));
+    }
+    for (long p = 0; p < 7; ++p)
+      for (int dir = 0; dir < 3; ++dir) {
+        const double pos = (s[p][dir] - std::floor(s[p][dir])) * g.M[dir];
+        const int i0 = int(std::ceil(pos - 0.5 * g.P));
+        CHECK(win.start[p][dir] == ((i0 % g.M[dir]) + g.M[dir]) % g.M[dir]);
+        for (int j = 0; j < g.P; ++j) {
+          double v[4];
+          g.window.derivatives((i0 + j) - pos, v);
+          for (int k = 0; k < 4; ++k)
+            CHECK(std::abs(win.at(p, dir, k)[j] - v[k]) <= ewald::WindowTable::kFitError * wscale[k]);
+        }
+      }
+    const auto& colouring = sg.colouring;
+    const auto& basis = sym_traceless_basis();
+    for (Moments m : {Moments::F, Moments::FT, Moments::FTS}) {
+      const int d = dof_per_particle(m);
+      const VecX q = random_vector(7 * d, 3);
+      std::vector<double> ref(g.points() * 3, 0.0);
+      const VecX u = random_vector(g.points() * 3, 4);  // a velocity field for the interpolation check
+      VecX yref = VecX::Zero(7 * d);
+      for (long p = 0; p < 7; ++p) {
+        const double* qp = q.data() + p * d;
+        Mat3 S = Mat3::Zero();
+        Vec3 T = Vec3::Zero();
+        if (d > 3) T = Vec3(qp[3], qp[4], qp[5]);
+        if (d > 6)
+          for (int b = 0; b < 5; ++b) S += qp[6 + b] * basis[b];
+        for (int j0 = 0; j0 < g.P; ++j0)
+          for (int j1 = 0; j1 < g.P; ++j1)
+            for (int j2 = 0; j2 < g.P; ++j2) {
+              const int jj[3] = {j0, j1, j2};
+              double w[3][4];
+              for (int dir = 0; dir < 3; ++dir)
+                for (int k = 0; k < 4; ++k) w[dir][k] = win.at(p, dir, k)[jj[dir]];
+              // Derivatives of W in grid units: D1[i], D2[i][j], D3[l][i][j] (d_l d_i d_j).
+              auto der = [&](int n0, int n1, int n2) { return w[0][n0] * w[1][n1] * w[2][n2]; };
+              auto order = [](int i, int j, int l, int dir) { return int(i == dir) + int(j == dir) + int(l == dir); };
+              double W = der(0, 0, 0), lap = 0.0;
+              Vec3 grad, gradlap = Vec3::Zero();
+              for (int i = 0; i < 3; ++i) grad[i] = der(i == 0, i == 1, i == 2);
+              for (int i = 0; i < 3; ++i)
+                for (int j = 0; j < 3; ++j) {
+                  lap += g.lap(i, j) * der((i == 0) + (j == 0), (i == 1) + (j == 1), (i == 2) + (j == 2));
+                  for (int l = 0; l < 3; ++l)
+                    gradlap[l] += g.lap(i, j) * der(order(i, j, l, 0), order(i, j, l, 1), order(i, j, l, 2));
+                }
+              const double WF = W + win.cF[p] * lap;
+              const Vec3 gT = g.J.transpose() * (grad + win.cT[p] * gradlap);  // physical gradient of W^T
+              const Vec3 f = WF * Vec3(qp[0], qp[1], qp[2]) + 0.5 * gT.cross(T) - S * gT;
+              const int i0 = (win.start[p][0] + j0) % g.M[0], i1 = (win.start[p][1] + j1) % g.M[1],
+                        i2 = (win.start[p][2] + j2) % g.M[2];
+              const long t = (long(i0) * g.M[1] + i1) * g.M[2] + i2;
+              for (int a = 0; a < 3; ++a) ref[a * g.points() + t] += f[a];
+              // Interpolation reference: U = sum W^F u, D = sum gT u^T, Omega = -(1/2) eps : D, E = -B : D.
+              const Vec3 uv(u[t], u[g.points() + t], u[2 * g.points() + t]);
+              double* y = yref.data() + p * d;
+              for (int a = 0; a < 3; ++a) y[a] += WF * uv[a];
+              if (d > 3) {
+                const Mat3 D = gT * uv.transpose();
+                y[3] += -0.5 * (D(1, 2) - D(2, 1));
+                y[4] += -0.5 * (D(2, 0) - D(0, 2));
+                y[5] += -0.5 * (D(0, 1) - D(1, 0));
+                if (d > 6)
+                  for (int b = 0; b < 5; ++b) y[6 + b] += -(basis[b].cwiseProduct(D)).sum();
+              }
+            }
+      }
+      const std::vector<double> padded = padded_field(g, u);
+      for (ewald::GridKernels path :
+           {ewald::GridKernels::automatic, ewald::GridKernels::baseline, ewald::GridKernels::generic}) {
+        CAPTURE(int(path));
+        ewald::force_grid_kernels(path);
+        std::vector<double> fast(g.stored() * 3);
+        ewald::spread(g, win, colouring, m, q, fast.data());
+        double err = 0.0, norm = 0.0, ghost = 0.0;
+        for (int a = 0; a < 3; ++a)
+          for (int i0 = 0; i0 < g.M[0]; ++i0)
+            for (int i1 = 0; i1 < g.M[1]; ++i1)
+              for (int i2 = 0; i2 < g.row; ++i2) {
+                const long t = (long(i0) * g.M[1] + i1) * g.M[2] + i2;
+                const long f = a * g.stored() + ewald::grid_offset(g, i0, i1, i2);
+                if (i2 < g.M[2]) {
+                  err = std::max(err, std::abs(fast[f] - ref[a * g.points() + t]));
+                  norm = std::max(norm, std::abs(ref[a * g.points() + t]));
+                } else {
+                  ghost = std::max(ghost, std::abs(fast[f]));  // folded back and cleared
+                }
+              }
+        CAPTURE(to_string(m));
+        CHECK(err < 1e-13 * norm);
+        CHECK(ghost == 0.0);
+        VecX y;
+        ewald::interpolate(g, win, colouring, m, padded.data(), y);
+        CHECK(rel_error(y, yref) < 1e-13);
+        ewald::force_grid_kernels(ewald::GridKernels::automatic);
       }
     }
-  const auto colouring = ewald::colour_slabs(g, win);
-  const auto& basis = sym_traceless_basis();
-  for (Moments m : {Moments::F, Moments::FT, Moments::FTS}) {
-    const int d = dof_per_particle(m);
-    const VecX q = random_vector(7 * d, 3);
-    std::vector<double> fast(g.stored() * 3);
-    ewald::spread(g, win, colouring, m, q, fast.data());
-    std::vector<double> ref(g.points() * 3, 0.0);
-    const VecX u = random_vector(g.points() * 3, 4);  // a velocity field for the interpolation check
-    VecX yref = VecX::Zero(7 * d);
-    for (long p = 0; p < 7; ++p) {
-      const double* qp = q.data() + p * d;
-      Mat3 S = Mat3::Zero();
-      Vec3 T = Vec3::Zero();
-      if (d > 3) T = Vec3(qp[3], qp[4], qp[5]);
-      if (d > 6)
-        for (int b = 0; b < 5; ++b) S += qp[6 + b] * basis[b];
-      for (int j0 = 0; j0 < g.P; ++j0)
-        for (int j1 = 0; j1 < g.P; ++j1)
-          for (int j2 = 0; j2 < g.P; ++j2) {
-            const int jj[3] = {j0, j1, j2};
-            double w[3][4];
-            for (int dir = 0; dir < 3; ++dir)
-              for (int k = 0; k < 4; ++k) w[dir][k] = win.at(p, dir, k)[jj[dir]];
-            // Derivatives of W in grid units: D1[i], D2[i][j], D3[l][i][j] (d_l d_i d_j).
-            auto der = [&](int n0, int n1, int n2) { return w[0][n0] * w[1][n1] * w[2][n2]; };
-            auto order = [](int i, int j, int l, int dir) { return int(i == dir) + int(j == dir) + int(l == dir); };
-            double W = der(0, 0, 0), lap = 0.0;
-            Vec3 grad, gradlap = Vec3::Zero();
-            for (int i = 0; i < 3; ++i) grad[i] = der(i == 0, i == 1, i == 2);
-            for (int i = 0; i < 3; ++i)
-              for (int j = 0; j < 3; ++j) {
-                lap += g.lap(i, j) * der((i == 0) + (j == 0), (i == 1) + (j == 1), (i == 2) + (j == 2));
-                for (int l = 0; l < 3; ++l)
-                  gradlap[l] += g.lap(i, j) * der(order(i, j, l, 0), order(i, j, l, 1), order(i, j, l, 2));
-              }
-            const double WF = W + win.cF[p] * lap;
-            const Vec3 gT = g.J.transpose() * (grad + win.cT[p] * gradlap);  // physical gradient of W^T
-            const Vec3 f = WF * Vec3(qp[0], qp[1], qp[2]) + 0.5 * gT.cross(T) - S * gT;
-            const int i0 = (win.start[p][0] + j0) % g.M[0], i1 = (win.start[p][1] + j1) % g.M[1],
-                      i2 = (win.start[p][2] + j2) % g.M[2];
-            const long t = (long(i0) * g.M[1] + i1) * g.M[2] + i2;
-            for (int a = 0; a < 3; ++a) ref[a * g.points() + t] += f[a];
-            // Interpolation reference: U = sum W^F u, D = sum gT u^T, Omega = -(1/2) eps : D, E = -B : D.
-            const Vec3 uv(u[t], u[g.points() + t], u[2 * g.points() + t]);
-            double* y = yref.data() + p * d;
-            for (int a = 0; a < 3; ++a) y[a] += WF * uv[a];
-            if (d > 3) {
-              const Mat3 D = gT * uv.transpose();
-              y[3] += -0.5 * (D(1, 2) - D(2, 1));
-              y[4] += -0.5 * (D(2, 0) - D(0, 2));
-              y[5] += -0.5 * (D(0, 1) - D(1, 0));
-              if (d > 6)
-                for (int b = 0; b < 5; ++b) y[6 + b] += -(basis[b].cwiseProduct(D)).sum();
-            }
-          }
+  }
+  CHECK(cases == 15);
+}
+
+TEST_CASE("PME spreading and interpolation: fast kernels equal the generic loops on larger grids, independent of the thread count") {
+  // 400 polydisperse particles (a = 0.5 ... 1.5) in the sheared box, supports 4 ... 16 and 24:
+  // fast (AVX2 where available, and baseline) against the generic loops within 1e-13 of the
+  // largest value; each path bitwise equal on 1 and 2 threads.
+  const int threads = omp_get_max_threads();
+  for (int P : {4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 24}) {
+    CAPTURE(P);
+    SmallGrid sg = small_grid(P, {P + 20, P + 22, P + 19}, 400, 5 + P);
+    const ewald::GridGeometry& g = sg.g;
+    const VecX u = random_vector(g.points() * 3, 9);
+    const std::vector<double> padded = padded_field(g, u);
+    for (Moments m : {Moments::F, Moments::FT, Moments::FTS}) {
+      CAPTURE(to_string(m));
+      const VecX q = random_vector(400 * dof_per_particle(m), 8);
+      std::vector<double> grid[3][2];
+      VecX y[3][2];
+      const ewald::GridKernels paths[3] = {ewald::GridKernels::generic, ewald::GridKernels::automatic,
+                                           ewald::GridKernels::baseline};
+      for (int k = 0; k < 3; ++k)
+        for (int t = 0; t < 2; ++t) {
+          ewald::force_grid_kernels(paths[k]);
+          omp_set_num_threads(t == 0 ? 1 : 2);
+          grid[k][t].resize(g.stored() * 3);
+          ewald::spread(g, sg.win, sg.colouring, m, q, grid[k][t].data());
+          ewald::interpolate(g, sg.win, sg.colouring, m, padded.data(), y[k][t]);
+        }
+      omp_set_num_threads(threads);
+      ewald::force_grid_kernels(ewald::GridKernels::automatic);
+      double gmax = 0.0;
+      for (double v : grid[0][0]) gmax = std::max(gmax, std::abs(v));
+      for (int k = 0; k < 3; ++k) {
+        CHECK(grid[k][0] == grid[k][1]);
+        CHECK((y[k][0] - y[k][1]).norm() == 0.0);
+        double e = 0.0;
+        for (std::size_t i = 0; i < grid[0][0].size(); ++i) e = std::max(e, std::abs(grid[k][0][i] - grid[0][0][i]));
+        CHECK(e <= 1e-13 * gmax);
+        CHECK((y[k][0] - y[0][0]).cwiseAbs().maxCoeff() <= 1e-13 * y[0][0].cwiseAbs().maxCoeff());
+      }
     }
-    double err = 0.0, norm = 0.0;
-    std::vector<double> padded(g.stored() * 3, 0.0);
-    for (int a = 0; a < 3; ++a)
-      for (int i0 = 0; i0 < g.M[0]; ++i0)
-        for (int i1 = 0; i1 < g.M[1]; ++i1)
-          for (int i2 = 0; i2 < g.M[2] + g.P - 1; ++i2) {
-            const long t = (long(i0) * g.M[1] + i1) * g.M[2] + i2 % g.M[2];
-            const long f = a * g.stored() + ewald::grid_offset(g, i0, i1, i2);
-            padded[f] = u[a * g.points() + t];
-            if (i2 < g.M[2]) {
-              err = std::max(err, std::abs(fast[f] - ref[a * g.points() + t]));
-              norm = std::max(norm, std::abs(ref[a * g.points() + t]));
-            }
-          }
-    CAPTURE(to_string(m));
-    CHECK(err < 1e-13 * norm);
-    VecX y;
-    ewald::interpolate(g, win, colouring, m, padded.data(), y);
-    CHECK(rel_error(y, yref) < 1e-13);
   }
 }
 
