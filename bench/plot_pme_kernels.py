@@ -10,6 +10,7 @@ defaults: bench/results/pme_kernels_before.json, bench/results/pme_kernels.json,
 """
 import argparse
 import json
+import math
 import statistics
 
 import matplotlib
@@ -59,6 +60,26 @@ for phase in ("wave", "product"):
         if r:
             print(f"{phase} {'F' if dof == 3 else 'FTS'}: new/old median {statistics.median(r):.2f}, "
                   f"range {min(r):.2f}-{max(r):.2f} over {len(r)} rows")
+
+# Exponent of the product time against N (least squares in log-log over the N present, 2 threads).
+print("| series (2 threads) | N | old product [s] | new product [s] | exponent old | exponent new |")
+print("|---|---|---|---|---|---|")
+series = sorted({(k[1], k[2], k[3]) for k in keys if k[4] == 2})
+for dof, phi, tol in series:
+    ks = sorted((k for k in keys if k[1:4] == (dof, phi, tol) and k[4] == 2), key=lambda k: k[0])
+    if len(ks) < 3:
+        continue
+    fits = []
+    for d in (old, new):
+        xs = [math.log(k[0]) for k in ks]
+        ys = [math.log(med(d[k], "product")) for k in ks]
+        mx, my = sum(xs) / len(xs), sum(ys) / len(ys)
+        fits.append(sum((x - mx) * (y - my) for x, y in zip(xs, ys)) / sum((x - mx) ** 2 for x in xs))
+    ns = ", ".join(f"{k[0]:.0e}" for k in ks)
+    to = ", ".join(f"{med(old[k], 'product'):.3g}" for k in ks)
+    tn = ", ".join(f"{med(new[k], 'product'):.3g}" for k in ks)
+    name = "F" if dof == 3 else "FTS"
+    print(f"| {name} φ {phi} tol {tol:.0e} | {ns} | {to} | {tn} | {fits[0]:.2f} | {fits[1]:.2f} |")
 
 fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), sharey=True)
 styles = {(3, 0.1): ("C0", "o"), (3, 0.4): ("C0", "s"), (11, 0.1): ("C3", "o"), (11, 0.4): ("C3", "s")}
