@@ -61,25 +61,28 @@ for phase in ("wave", "product"):
             print(f"{phase} {'F' if dof == 3 else 'FTS'}: new/old median {statistics.median(r):.2f}, "
                   f"range {min(r):.2f}-{max(r):.2f} over {len(r)} rows")
 
-# Exponent of the product time against N (least squares in log-log over the N present, 2 threads).
+# Exponent of the product time against N (least squares in log-log over the N present, 2 threads),
+# for every series of the new build with at least 3 sizes; the old build's where it has the same.
+def slope(d, ks):
+    xs = [math.log(k[0]) for k in ks]
+    ys = [math.log(med(d[k], "product")) for k in ks]
+    mx, my = sum(xs) / len(xs), sum(ys) / len(ys)
+    return sum((x - mx) * (y - my) for x, y in zip(xs, ys)) / sum((x - mx) ** 2 for x in xs)
+
+
 print("| series (2 threads) | N | old product [s] | new product [s] | exponent old | exponent new |")
 print("|---|---|---|---|---|---|")
-series = sorted({(k[1], k[2], k[3]) for k in keys if k[4] == 2})
-for dof, phi, tol in series:
-    ks = sorted((k for k in keys if k[1:4] == (dof, phi, tol) and k[4] == 2), key=lambda k: k[0])
+for dof, phi, tol in sorted({(k[1], k[2], k[3]) for k in new if k[4] == 2}):
+    ks = sorted((k for k in new if k[1:4] == (dof, phi, tol) and k[4] == 2), key=lambda k: k[0])
     if len(ks) < 3:
         continue
-    fits = []
-    for d in (old, new):
-        xs = [math.log(k[0]) for k in ks]
-        ys = [math.log(med(d[k], "product")) for k in ks]
-        mx, my = sum(xs) / len(xs), sum(ys) / len(ys)
-        fits.append(sum((x - mx) * (y - my) for x, y in zip(xs, ys)) / sum((x - mx) ** 2 for x in xs))
+    both = all(k in old for k in ks)
     ns = ", ".join(f"{k[0]:.0e}" for k in ks)
-    to = ", ".join(f"{med(old[k], 'product'):.3g}" for k in ks)
+    to = ", ".join(f"{med(old[k], 'product'):.3g}" for k in ks) if both else "–"
     tn = ", ".join(f"{med(new[k], 'product'):.3g}" for k in ks)
+    so = f"{slope(old, ks):.2f}" if both else "–"
     name = "F" if dof == 3 else "FTS"
-    print(f"| {name} φ {phi} tol {tol:.0e} | {ns} | {to} | {tn} | {fits[0]:.2f} | {fits[1]:.2f} |")
+    print(f"| {name} φ {phi} tol {tol:.0e} | {ns} | {to} | {tn} | {so} | {slope(new, ks):.2f} |")
 
 fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), sharey=True)
 styles = {(3, 0.1): ("C0", "o"), (3, 0.4): ("C0", "s"), (11, 0.1): ("C3", "o"), (11, 0.4): ("C3", "s")}
