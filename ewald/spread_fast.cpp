@@ -110,74 +110,82 @@ STOKESIAN_GK_INLINE void load_factors(const ParticleWindows& win, long p, double
   }
 }
 
+// The walk shared by spreading and interpolation: loads the particle's factors (C, the direction-2
+// ones, is returned for the row loops), then per direction-0 index j0 computes the coefficients T of
+// all its rows, calls plane(T) once and row(j1, base) for each row, base the offset of the row's first
+// point in a field.
+template <int V, bool Grad, class Plane, class Row>
+STOKESIAN_GK_INLINE void walk_window(const GridGeometry& g, const ParticleWindows& win, const Metric& gm, long p,
+                                     v4u (*C)[V / 4], Plane&& plane, Row&& row) {
+  const int P = g.P;
+  double B[4][V];
+  load_factors<V>(win, p, B, C);
+  const auto& s = win.start[std::size_t(p)];
+  double T[4][4][V];
+  for (int j0 = 0; j0 < P; ++j0) {
+    const int i0 = (s[0] + j0) % g.M[0];
+    const double A[4] = {win.at(p, 0, 0)[j0], win.at(p, 0, 1)[j0], win.at(p, 0, 2)[j0], win.at(p, 0, 3)[j0]};
+    row_coeffs<V, Grad>(A, B, win.cF[p], win.cT[p], gm, T);
+    plane(static_cast<const double(*)[4][V]>(T));
+    for (int j1 = 0; j1 < P; ++j1) row(j1, grid_offset(g, i0, (s[1] + j1) % g.M[1], s[2]));
+  }
+}
+
 template <int V, bool Grad>
 STOKESIAN_GK_INLINE void spread_one(const GridGeometry& g, const ParticleWindows& win, const Metric& gm, long p,
                                     const double (*S)[4], double* grid) {
   constexpr int K = V / 4, E = Grad ? 4 : 1;
-  const int P = g.P;
   const long stored = g.stored();
-  double B[4][V];
   v4u C[4][K];
-  load_factors<V>(win, p, B, C);
-  const auto& s = win.start[std::size_t(p)];
-  for (int j0 = 0; j0 < P; ++j0) {
-    const int i0 = (s[0] + j0) % g.M[0];
-    const double A[4] = {win.at(p, 0, 0)[j0], win.at(p, 0, 1)[j0], win.at(p, 0, 2)[j0], win.at(p, 0, 3)[j0]};
-    double T[4][4][V], a[3][4][V];
-    row_coeffs<V, Grad>(A, B, win.cF[p], win.cT[p], gm, T);
-    for (int c = 0; c < 3; ++c)
-      for (int d = 0; d < 4; ++d)
-        for (int l = 0; l < V; ++l) {
-          double v = S[c][0] * T[0][d][l];
-          for (int e = 1; e < E; ++e) v += S[c][e] * T[e][d][l];
-          a[c][d][l] = v;
+  double a[3][4][V];
+  walk_window<V, Grad>(
+      g, win, gm, p, C,
+      [&](const double (*T)[4][V]) {
+        for (int c = 0; c < 3; ++c)
+          for (int d = 0; d < 4; ++d)
+            for (int l = 0; l < V; ++l) {
+              double v = S[c][0] * T[0][d][l];
+              for (int e = 1; e < E; ++e) v += S[c][e] * T[e][d][l];
+              a[c][d][l] = v;
+            }
+      },
+      [&](int j1, long base) {
+        for (int c = 0; c < 3; ++c) {
+          v4u* r = reinterpret_cast<v4u*>(grid + c * stored + base);
+          const double a0 = a[c][0][j1], a1 = a[c][1][j1], a2 = a[c][2][j1], a3 = a[c][3][j1];
+          for (int k = 0; k < K; ++k) {
+            v4u v = a0 * C[0][k] + a1 * C[1][k] + a2 * C[2][k];
+            if constexpr (Grad) v += a3 * C[3][k];
+            r[k] += v;
+          }
         }
-    for (int j1 = 0; j1 < P; ++j1) {
-      const long base = grid_offset(g, i0, (s[1] + j1) % g.M[1], s[2]);
-      for (int c = 0; c < 3; ++c) {
-        v4u* r = reinterpret_cast<v4u*>(grid + c * stored + base);
-        const double a0 = a[c][0][j1], a1 = a[c][1][j1], a2 = a[c][2][j1], a3 = a[c][3][j1];
-        for (int k = 0; k < K; ++k) {
-          v4u v = a0 * C[0][k] + a1 * C[1][k] + a2 * C[2][k];
-          if constexpr (Grad) v += a3 * C[3][k];
-          r[k] += v;
-        }
-      }
-    }
-  }
+      });
 }
 
 template <int V, bool Grad>
 STOKESIAN_GK_INLINE void interpolate_one(const GridGeometry& g, const ParticleWindows& win, const Metric& gm, long p,
                                          const double* grid, double (*out)[4]) {
   constexpr int K = V / 4, E = Grad ? 4 : 1;
-  const int P = g.P;
   const long stored = g.stored();
-  double B[4][V];
   v4u C[4][K];
-  load_factors<V>(win, p, B, C);
-  const auto& s = win.start[std::size_t(p)];
   v4u acc[3][E];
   for (int c = 0; c < 3; ++c)
     for (int e = 0; e < E; ++e) acc[c][e] = v4u{0.0, 0.0, 0.0, 0.0};
-  for (int j0 = 0; j0 < P; ++j0) {
-    const int i0 = (s[0] + j0) % g.M[0];
-    const double A[4] = {win.at(p, 0, 0)[j0], win.at(p, 0, 1)[j0], win.at(p, 0, 2)[j0], win.at(p, 0, 3)[j0]};
-    double T[4][4][V];
-    row_coeffs<V, Grad>(A, B, win.cF[p], win.cT[p], gm, T);
-    for (int j1 = 0; j1 < P; ++j1) {
-      const double* row = grid + grid_offset(g, i0, (s[1] + j1) % g.M[1], s[2]);
-      for (int k = 0; k < K; ++k) {
-        v4u w[E];
-        for (int e = 0; e < E; ++e)
-          w[e] = T[e][0][j1] * C[0][k] + T[e][1][j1] * C[1][k] + T[e][2][j1] * C[2][k] + T[e][3][j1] * C[3][k];
-        for (int c = 0; c < 3; ++c) {
-          const v4u r = *reinterpret_cast<const v4u*>(row + c * stored + 4 * k);
-          for (int e = 0; e < E; ++e) acc[c][e] += w[e] * r;
+  const double (*T)[4][V] = nullptr;
+  walk_window<V, Grad>(
+      g, win, gm, p, C, [&](const double (*plane)[4][V]) { T = plane; },
+      [&](int j1, long base) {
+        const double* row = grid + base;
+        for (int k = 0; k < K; ++k) {
+          v4u w[E];
+          for (int e = 0; e < E; ++e)
+            w[e] = T[e][0][j1] * C[0][k] + T[e][1][j1] * C[1][k] + T[e][2][j1] * C[2][k] + T[e][3][j1] * C[3][k];
+          for (int c = 0; c < 3; ++c) {
+            const v4u r = *reinterpret_cast<const v4u*>(row + c * stored + 4 * k);
+            for (int e = 0; e < E; ++e) acc[c][e] += w[e] * r;
+          }
         }
-      }
-    }
-  }
+      });
   for (int c = 0; c < 3; ++c)
     for (int e = 0; e < E; ++e) out[c][e] = (acc[c][e][0] + acc[c][e][1]) + (acc[c][e][2] + acc[c][e][3]);
 }
