@@ -175,7 +175,7 @@ int main(int argc, char** argv) {
     }
   // Crossover of `solver = "auto"` (engine/model.cpp): dense vs accelerated per solve, FTS, phi 0.3.
   for (int periodic = 0; periodic < (min_n > 0 ? 0 : 2); ++periodic)
-    for (long n : periodic ? std::vector<long>{50, 100, 150, 200, 300} : std::vector<long>{100, 200, 300, 400, 600}) {
+    for (long n : periodic ? std::vector<long>{50, 100, 150, 200, 300} : std::vector<long>{25, 50, 75, 100, 200, 300, 400, 600}) {
       if (opt.quick && n > 200) continue;
       const Suspension s = suspension(n, 0.3, 17, periodic != 0);
       const Run r = run_accelerated(s, tol, AcceleratedStokesianDynamics::kShift, AcceleratedStokesianDynamics::Method::gmres);

@@ -70,9 +70,10 @@ std::string unusable(const SolverEntry& e, const Scene& s, bool brownian) {
 
 // `[hydrodynamics] solver = "auto"` picks dense SD up to these N and accelerated SD beyond, by
 // measured cost per deterministic FTS solve at phi = 0.3, tolerance 1e-4, 2 threads (bench_asd,
-// section "crossover", 2026-11-24): open domain accelerated / dense = 1.15 at N = 100, 0.64 at 200,
-// 0.30 at 300; periodic box 0.88 at N = 50, 0.29 at 100 (docs/benchmarks.md).
-constexpr std::size_t kAutoDenseUpToOpen = 120, kAutoDenseUpToPeriodic = 40;
+// section "crossover"): open domain, with the vectorised direct product (2026-11-28),
+// accelerated / dense = 0.99 at N = 25 and 50, 0.68 at 75, 0.49 at 100; periodic box (2026-11-24)
+// 0.88 at N = 50, 0.29 at 100 (docs/benchmarks.md). At equal cost the dense reference is kept.
+constexpr std::size_t kAutoDenseUpToOpen = 50, kAutoDenseUpToPeriodic = 40;
 
 // The registered solver a `[hydrodynamics] solver` value names ("" for auto).
 std::string solver_named(const std::string& key) {

@@ -518,7 +518,7 @@ TEST_CASE("[hydrodynamics] solver: auto picks dense below the crossover and acce
   const ResolvedModel big = model(many);
   CHECK(big.solver == "accelerated_sd");
   bool said = false;
-  for (const auto& r : big.reasons) said |= contains(r, "auto solver: N = 1000 > 120 -> accelerated_sd");
+  for (const auto& r : big.reasons) said |= contains(r, "auto solver: N = 1000 > 50 -> accelerated_sd");
   CHECK(said);
   CHECK(model(many + "solver = \"dense\"\n").solver == "dense_sd");
   // dense beyond its limit is refused with the reason.
@@ -534,6 +534,29 @@ TEST_CASE("[hydrodynamics] solver: auto picks dense below the crossover and acce
   bool noted = false;
   for (const auto& r : ff.reasons) noted |= contains(r, "applies to the stokesian level only");
   CHECK(noted);
+}
+
+TEST_CASE("far_field auto in open domains: direct below the octree's crossover, the tree from it") {
+  // trees::tree_auto_from: the measured crossover with the vectorised direct sum (docs/tree.md).
+  auto model = [](long n, const char* moments) {
+    return resolve_model(io::parse_scene("[particles]\ngenerate = \"lattice\"\ncount = " + std::to_string(n) +
+                                             "\nvolume_fraction = 0.1\n[hydrodynamics]\nmodel = \"far_field\"\n"
+                                             "moments = \"" + moments + "\"\ntolerance = 1e-3\n",
+                                         "s.toml"));
+  };
+  auto said = [](const ResolvedModel& r, const std::string& what) {
+    bool yes = false;
+    for (const auto& line : r.reasons) yes |= contains(line, what);
+    return yes;
+  };
+  for (const char* m : {"F", "FTS"}) {
+    CAPTURE(m);
+    const ResolvedModel small = model(2000, m), large = model(40000, m);
+    CHECK(small.far_field == "direct");
+    CHECK(said(small, "the octree's measured crossover"));
+    CHECK(large.far_field == "tree");
+    CHECK(said(large, "the measured crossover with direct"));
+  }
 }
 
 TEST_CASE("[flow] peclet sets rate = Pe kT / (6 pi mu); refused with rate, without kT or without a flow") {

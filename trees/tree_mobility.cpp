@@ -273,8 +273,13 @@ double cost_per_particle(const TreeParameters& p, Moments m) {
 }  // namespace
 
 long tree_auto_from(double tolerance, Moments m) {
-  (void)m;  // one rule for F, FT and FTS
-  return tolerance > 0 ? 1000 : 0;
+  if (!(tolerance > 0)) return 0;
+  // Rows: product tolerance >= 5e-5 (measured at 1e-3 and 1e-4), >= 5e-7 (1e-6), below (1e-8).
+  const int row = tolerance >= 5e-5 ? 0 : tolerance >= 5e-7 ? 1 : 2;
+  static constexpr long kFrom[3][3] = {{7000, 20000, 30000},    // F
+                                       {5000, 15000, 20000},    // FT
+                                       {7000, 11000, 22000}};   // FTS
+  return kFrom[m == Moments::F ? 0 : m == Moments::FT ? 1 : 2][row];
 }
 
 double tree_product_seconds(const TreeParameters& p, Moments m, double n) { return n * cost_per_particle(p, m); }

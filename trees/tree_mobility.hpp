@@ -76,11 +76,10 @@ struct TreeParameters {
 TreeParameters tree_parameters(double tolerance, Moments m);
 
 // `far_field = "auto"` in open domains picks the tree from this N on (0: never), with t the
-// products' tolerance: the measured crossover of one product with the direct sum (uniform cloud,
-// phi = 0.1, radii 0.5-1.5, 2 threads, 2026-11-25; docs/tree.md "Crossover"): the tree
-// is as fast as the direct sum at N = 1000 and faster beyond, F and FTS, t = 1e-3 ... 1e-10 (its
-// exact near pairs are vectorised closed forms; the direct sum uses the general pair kernel), so
-//     N = 1000 for every t (F, FT and FTS).
+// products' tolerance: the measured crossover of set-up plus one product with the vectorised
+// direct sum (engine/kernels/direct_fast.cpp; uniform cloud, phi = 0.1, radii 0.5-1.5, overlaps
+// allowed, 2 threads, 2026-11-28; docs/tree.md "Crossover"), rounded up:
+//     t >= 5e-5: F 7000, FT 5000, FTS 7000;  t >= 5e-7: 20000, 15000, 11000;  smaller: 30000, 20000, 22000.
 long tree_auto_from(double tolerance, Moments m);
 
 // Modelled relative error of a product with these parameters (the model above).

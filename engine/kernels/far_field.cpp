@@ -57,8 +57,8 @@ void assemble_mobility(const std::vector<Vec3>& x, const std::vector<double>& a,
   }
 }
 
-void mobility_product(const std::vector<Vec3>& x, const std::vector<double>& a, double mu, Moments m,
-                      const VecX& in, VecX& out) {
+void mobility_product_reference(const std::vector<Vec3>& x, const std::vector<double>& a, double mu, Moments m,
+                                const VecX& in, VecX& out) {
   const int d = dof_per_particle(m);
   const long n = long(x.size());
   assert(in.size() == n * d);

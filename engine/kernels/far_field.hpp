@@ -9,7 +9,9 @@
 //                         (equal to dense_mobility to round-off, tests/test_sd_dense_fast.cpp);
 //   mobility_product    - matrix-free y = M x, O(N^2) work, OpenMP over the rows (each thread
 //                         owns the output rows of its particles, so there are no write conflicts
-//                         and the result does not depend on the thread count).
+//                         and the result does not depend on the thread count); separated pairs
+//                         vectorised (direct_fast.cpp);
+//   mobility_product_reference - its plain twin: one apply_pair per ordered pair.
 // Vectors use the interleaved per-particle layout [F(3) T(3) S(5)] (engine/core/layout.hpp).
 #include "engine/core/operators.hpp"
 #include "engine/core/types.hpp"
@@ -27,6 +29,12 @@ void assemble_mobility(const std::vector<Vec3>& x, const std::vector<double>& a,
 // y = M x (y is resized).
 void mobility_product(const std::vector<Vec3>& x, const std::vector<double>& a, double mu, Moments m,
                       const VecX& in, VecX& out);
+void mobility_product_reference(const std::vector<Vec3>& x, const std::vector<double>& a, double mu, Moments m,
+                                const VecX& in, VecX& out);
+// Which path mobility_product takes (tests): automatic (AVX2 + FMA when the CPU has them),
+// baseline (the vectorised loop without AVX2), reference (mobility_product_reference).
+enum class DirectKernels { automatic, baseline, reference };
+void force_direct_kernels(DirectKernels k);
 
 // Direct summation, open domains. Holds its own copy of the configuration.
 class DirectFarField final : public MobilityOperator {
