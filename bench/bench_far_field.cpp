@@ -4,6 +4,8 @@
 // and the Euler update), "product" (matrix-free y = M x), "dense_assembly" (dense_mobility),
 // "dense_matvec" (M x with the assembled matrix).
 //   bench_far_field [--quick] [--out DIR]
+// BENCH_DIRECT=reference times the plain twin (mobility_product_reference, one apply_pair per
+// ordered pair) instead of the vectorised product, into far_field_direct_reference.json.
 #include "bench/harness.hpp"
 #include "engine/kernels/far_field.hpp"
 #include "engine/simulation.hpp"
@@ -13,6 +15,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <random>
 #include <sstream>
@@ -24,7 +27,10 @@ int main(int argc, char** argv) {
   const bool quick = opt.quick;
   const std::string out = opt.out;
   const std::vector<long> sizes = quick ? std::vector<long>{100, 200, 400} : std::vector<long>{100, 200, 400, 800, 1600, 3200, 6400};
-  bench::Results res(quick ? "far_field_direct_quick" : "far_field_direct");
+  const char* which = std::getenv("BENCH_DIRECT");
+  const bool reference = which && std::string(which) == "reference";
+  if (reference) force_direct_kernels(DirectKernels::reference);
+  bench::Results res(std::string(quick ? "far_field_direct_quick" : "far_field_direct") + (reference ? "_reference" : ""));
   const int max_threads = std::min(2, omp_get_max_threads());
   for (Moments m : {Moments::F, Moments::FT, Moments::FTS}) {
     for (long n : sizes) {
