@@ -276,9 +276,9 @@ long tree_auto_from(double tolerance, Moments m) {
   if (!(tolerance > 0)) return 0;
   // Rows: product tolerance >= 5e-5 (measured at 1e-3 and 1e-4), >= 5e-7 (1e-6), below (1e-8).
   const int row = tolerance >= 5e-5 ? 0 : tolerance >= 5e-7 ? 1 : 2;
-  static constexpr long kFrom[3][3] = {{7000, 20000, 30000},    // F
+  static constexpr long kFrom[3][3] = {{8000, 20000, 30000},    // F
                                        {5000, 15000, 20000},    // FT
-                                       {7000, 11000, 22000}};   // FTS
+                                       {7000, 12000, 23000}};   // FTS
   return kFrom[m == Moments::F ? 0 : m == Moments::FT ? 1 : 2][row];
 }
 

@@ -79,7 +79,7 @@ TreeParameters tree_parameters(double tolerance, Moments m);
 // products' tolerance: the measured crossover of set-up plus one product with the vectorised
 // direct sum (engine/kernels/direct_fast.cpp; uniform cloud, phi = 0.1, radii 0.5-1.5, overlaps
 // allowed, 2 threads, 2026-11-28; docs/tree.md "Crossover"), rounded up:
-//     t >= 5e-5: F 7000, FT 5000, FTS 7000;  t >= 5e-7: 20000, 15000, 11000;  smaller: 30000, 20000, 22000.
+//     t >= 5e-5: F 8000, FT 5000, FTS 7000;  t >= 5e-7: 20000, 15000, 12000;  smaller: 30000, 20000, 23000.
 long tree_auto_from(double tolerance, Moments m);
 
 // Modelled relative error of a product with these parameters (the model above).
