@@ -56,7 +56,7 @@ std::string lattice64(const std::string& extra) {
 
 TEST_CASE("dense SD at N = 64: the matrices are (d N)^2 doubles") {
   for (const auto& [moments, d] : {std::pair{"F", 3}, std::pair{"FT", 6}}) {
-    const Scene s = io::parse_scene(lattice64(std::string("[hydrodynamics]\nmodel = \"stokesian\"\nmoments = \"") +
+    const Scene s = io::parse_scene(lattice64(std::string("[hydrodynamics]\nmodel = \"stokesian\"\nsolver = \"dense\"\nmoments = \"") +
                                               moments + "\"\n[time]\ndt = 0.01\nsteps = 1\n"),
                                     "sd64.toml");
     const ResolvedModel m = resolve_model(s);
@@ -136,7 +136,8 @@ TEST_CASE("CLI: a PME box the machine cannot hold is refused up front (exit 2, t
 }
 
 TEST_CASE("CLI: dense SD over STOKESIAN_MEMORY_LIMIT is refused naming the largest part; above half warns") {
-  const std::string scene = lattice64("[hydrodynamics]\nmodel = \"stokesian\"\nmoments = \"FT\"\n[time]\ndt = 0.01\nsteps = 1\n");
+  const std::string scene =
+      lattice64("[hydrodynamics]\nmodel = \"stokesian\"\nsolver = \"dense\"\nmoments = \"FT\"\n[time]\ndt = 0.01\nsteps = 1\n");
   // Peak: 4 x 1.12 MB (matrices) + 64 KB (particles) + the near field: about 4.9 MB.
   const fs::path dir = scratch("sd_limit");
   Cli c = cli(dir, scene, "run scene.toml --out o.h5", "STOKESIAN_MEMORY_LIMIT=2M");
