@@ -25,6 +25,7 @@
 #include "ewald/interpolate.hpp"
 #include "ewald/spread.hpp"
 
+#include "engine/core/cpu.hpp"
 #include "engine/core/sym_traceless.hpp"
 
 #include <atomic>
@@ -32,10 +33,8 @@
 
 #if defined(__x86_64__) && defined(__GNUC__)
 #define STOKESIAN_GK_INLINE inline __attribute__((always_inline))
-#define STOKESIAN_GK_AVX2 __attribute__((target("avx2,fma")))
 #else
 #define STOKESIAN_GK_INLINE inline
-#define STOKESIAN_GK_AVX2
 #endif
 
 namespace stokesian::ewald {
@@ -43,14 +42,7 @@ namespace {
 
 std::atomic<int> g_kernels{int(GridKernels::automatic)};
 
-bool use_avx2() {
-#if defined(__x86_64__) && defined(__GNUC__)
-  static const bool yes = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
-  return yes && g_kernels.load() == int(GridKernels::automatic);
-#else
-  return false;
-#endif
-}
+bool use_avx2() { return cpu_has_avx2_fma() && g_kernels.load() == int(GridKernels::automatic); }
 
 typedef double v4u __attribute__((vector_size(32), aligned(8)));  // 4 doubles, unaligned access
 
@@ -224,7 +216,7 @@ STOKESIAN_GK_INLINE void interpolate_list(const GridGeometry& g, const ParticleW
 }
 
 template <int V, bool Grad>
-STOKESIAN_GK_AVX2 void spread_avx2(const GridGeometry& g, const ParticleWindows& win, const std::vector<long>& list,
+STOKESIAN_AVX2_FMA void spread_avx2(const GridGeometry& g, const ParticleWindows& win, const std::vector<long>& list,
                                    Moments m, const double* in, double* grid) {
   spread_list<V, Grad>(g, win, list, m, in, grid);
 }
@@ -234,7 +226,7 @@ void spread_base(const GridGeometry& g, const ParticleWindows& win, const std::v
   spread_list<V, Grad>(g, win, list, m, in, grid);
 }
 template <int V, bool Grad>
-STOKESIAN_GK_AVX2 void interpolate_avx2(const GridGeometry& g, const ParticleWindows& win,
+STOKESIAN_AVX2_FMA void interpolate_avx2(const GridGeometry& g, const ParticleWindows& win,
                                         const std::vector<long>& list, Moments m, const double* grid, double* out) {
   interpolate_list<V, Grad>(g, win, list, m, grid, out);
 }

@@ -26,6 +26,7 @@
 // apply_pair, and with dense_mobility.
 #include "engine/kernels/far_field.hpp"
 
+#include "engine/core/cpu.hpp"
 #include "engine/core/parallel.hpp"
 #include "engine/kernels/mobility_pair.hpp"
 
@@ -35,25 +36,13 @@
 #include <cstring>
 #include <vector>
 
-#if defined(__x86_64__) && defined(__GNUC__)
-#define STOKESIAN_DK_AVX2 __attribute__((target("avx2,fma")))
-#else
-#define STOKESIAN_DK_AVX2
-#endif
 
 namespace stokesian {
 namespace {
 
 std::atomic<int> g_direct{int(DirectKernels::automatic)};
 
-bool use_avx2() {
-#if defined(__x86_64__) && defined(__GNUC__)
-  static const bool yes = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
-  return yes && g_direct.load() == int(DirectKernels::automatic);
-#else
-  return false;
-#endif
-}
+bool use_avx2() { return cpu_has_avx2_fma() && g_direct.load() == int(DirectKernels::automatic); }
 
 // Structure-of-arrays copy of one product's inputs: positions, radii squared, and x by component.
 struct Soa {
@@ -231,7 +220,7 @@ void rows_baseline(const Soa& s, long i0, long i1, double mu, Moments m, const V
 }
 
 template <int D>
-STOKESIAN_DK_AVX2 void rows_avx2(const Soa& s, long i0, long i1, double mu, Moments m, const VecX& in, double* out) {
+STOKESIAN_AVX2_FMA void rows_avx2(const Soa& s, long i0, long i1, double mu, Moments m, const VecX& in, double* out) {
   rows<D, true>(s, i0, i1, mu, m, in, out);
 }
 
