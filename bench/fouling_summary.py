@@ -33,6 +33,125 @@ def deposited(x, r, ids, fixed_from):
     return count
 
 
+def branches(outline, openings, inlet):
+    """The outline's branches as engine/core/outline.hpp defines them (OutlineBranches), for files
+    written before pressure_drop_branches existed: openings with the same flow direction and
+    overlapping spans across it form one branch (the inlet's first); a point belongs to the first
+    branch whose strip holds it and from which it reaches one of the branch's openings along the
+    flow without entering another branch's strip."""
+    v = np.array(outline, float)
+    n = len(v)
+    a2 = sum(v[k, 0] * v[(k + 1) % n, 1] - v[(k + 1) % n, 0] * v[k, 1] for k in range(n))
+    orient = 1.0 if a2 > 0 else -1.0
+    eps = 1e-9 * (1.0 + np.abs(v).max())
+
+    def outward(k):
+        t = v[(k + 1) % n] - v[k]
+        t = t / np.linalg.norm(t)
+        return orient * np.array([t[1], -t[0]])
+
+    def across(d, p):
+        return -d[1] * p[0] + d[0] * p[1]
+
+    out = []
+    for k in [inlet] + [e for e in sorted(openings) if e != inlet]:
+        d = -outward(k) if k == inlet else outward(k)
+        s0, s1 = across(d, v[k]), across(d, v[(k + 1) % n])
+        lo, hi = min(s0, s1), max(s0, s1)
+        at = d @ (0.5 * (v[k] + v[(k + 1) % n]))
+        for b in out:
+            if b["d"] @ d > 1 - 1e-9 and lo <= b["hi"] + eps and hi >= b["lo"] - eps:
+                b["lo"], b["hi"] = min(b["lo"], lo), max(b["hi"], hi)
+                b["openings"].append(k)
+                b["at"].append(at)
+                break
+        else:
+            out.append({"d": d, "lo": lo, "hi": hi, "width": float(np.linalg.norm(v[(k + 1) % n] - v[k])),
+                        "openings": [k], "at": [at]})
+
+    def of_point(p, e=0.0):
+        for i, b in enumerate(out):
+            if not b["lo"] - e <= across(b["d"], p) <= b["hi"] + e:
+                continue
+            for at in b["at"]:
+                T = at - b["d"] @ p
+                t0, t1 = min(0.0, T), max(0.0, T)
+                blocked = False
+                for j, c in enumerate(out):
+                    g0 = across(c["d"], p)
+                    if j == i or c["lo"] - e <= g0 <= c["hi"] + e:
+                        continue
+                    g1 = across(c["d"], b["d"])
+                    if abs(g1) < 1e-12:
+                        continue
+                    ta, tb = sorted(((c["lo"] - g0) / g1, (c["hi"] - g0) / g1))
+                    if min(tb, t1) - max(ta, t0) > eps:
+                        blocked = True
+                        break
+                if not blocked:
+                    return i
+        return -1
+
+    return out, of_point, eps, orient
+
+
+def branch_series(scene, obs, x, r, ids, capacity, steps):
+    """pressure_drop_branches and areal_fraction_branches: read, or rebuilt from the per-edge wall
+    stresses (each wall edge's (section) sums of -F.t and F.n_in give -F.d for its branch exactly
+    when all its wall particles belong to one branch, as in the T-junction and the contraction)."""
+    if "pressure_drop_branches" in obs:
+        return (obs["pressure_drop_branches/value"][:].tolist(), obs["areal_fraction_branches/value"][:].tolist(),
+                "recorded")
+    import tomllib
+    w = tomllib.loads(scene)["walls"]
+    outline, openings, inlet = w["outline"], w["openings"], w["inlet"]
+    depth, ns = w.get("depth", 2.0 * w.get("radius", 1.0)), w.get("sections", 1)
+    br, of_point, eps, orient = branches(outline, openings, inlet)
+    v = np.array(outline, float)
+    n = len(v)
+    wall_edges = [k for k in range(n) if k not in openings]
+    shear = obs["wall_shear_stress/value"][:]   # [frames, walls, sections]
+    normal = obs["wall_normal_stress/value"][:]
+    dp = np.zeros((shear.shape[0], len(br)))
+    for w_i, k in enumerate(wall_edges):
+        A, B = v[k], v[(k + 1) % n]
+        length = np.linalg.norm(B - A)
+        t = (B - A) / length
+        n_in = -orient * np.array([t[1], -t[0]])
+        owners = {of_point(A + (j + 0.5) / ns * (B - A), eps) for j in range(ns)}
+        if len(owners) != 1:
+            raise SystemExit(f"wall edge {k} spans several branches: rebuild needs pressure_drop_branches in the file")
+        b = owners.pop()
+        if b < 0:
+            continue
+        d = br[b]["d"]
+        area = length / ns * depth
+        # -F.d = (d.t)(-F.t) - (d.n_in)(F.n_in), summed over the edge's sections.
+        dp[:, b] += area * ((d @ t) * shear[:, w_i, :].sum(axis=1) - (d @ n_in) * normal[:, w_i, :].sum(axis=1))
+    for b in range(len(br)):
+        dp[:, b] /= br[b]["width"] * depth
+    # Areal fractions: the areas each branch owns, by cell-centre sampling at (narrowest opening)/50.
+    h = min(b["width"] for b in br) / 50.0
+    lo, hi = v.min(axis=0), v.max(axis=0)
+    from matplotlib.path import Path
+    gx = lo[0] + h * (np.arange(int(np.ceil((hi[0] - lo[0]) / h))) + 0.5)
+    gy = lo[1] + h * (np.arange(int(np.ceil((hi[1] - lo[1]) / h))) + 0.5)
+    X, Y = np.meshgrid(gx, gy)
+    pts = np.c_[X.ravel(), Y.ravel()]
+    inside = Path(v).contains_points(pts)
+    owned = np.zeros(len(br))
+    for p in pts[inside]:
+        owned[of_point(p)] += h * h
+    areal = np.zeros((len(steps), len(br)))
+    for f in range(len(steps)):
+        for i in np.where(ids[f][:capacity] >= 0)[0]:
+            b = of_point(x[f][i, :2])
+            if b >= 0:
+                areal[f, b] += np.pi * r[f][i] ** 2
+    areal /= owned
+    return dp.tolist(), areal.tolist(), "rebuilt from wall_shear_stress and wall_normal_stress"
+
+
 def extract(path):
     f = h5py.File(path, "r")
     obs = f["observables"]
@@ -53,6 +172,8 @@ def extract(path):
     x = part["position/value"]
     r = part["radius/value"]
     series["deposited"] = [deposited(x[k], r[k], ids[k], capacity) for k in range(len(steps))]
+    series["pressure_drop_branches"], series["areal_fraction_branches"], how = branch_series(
+        scene, obs, x, r, ids, capacity, steps)
     # The last frame's configuration (present spheres and walls) for the picture.
     last = len(steps) - 1
     keep = np.where(ids[last] >= 0)[0]
@@ -60,7 +181,7 @@ def extract(path):
             "wall": (keep >= capacity).tolist()}
     return {"file": path, "build": build, "frames": len(steps), "last_step": int(steps[-1]), "last_time": float(times[-1]),
             "capacity": capacity, "scene": scene, "contact_gap": CONTACT, "series": series,
-            "snapshot": snap}
+            "snapshot": snap, "branches_source": how}
 
 
 def main():

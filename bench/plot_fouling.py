@@ -1,7 +1,9 @@
 #!/usr/bin/python3
 """Chart the fouling runs (bench/fouling_summary.py; issue 17, docs/channels.md "Fouling runs"):
-for each run, against time, (a) the particle pressure drop pressure_drop_particles, (b) the areal
-fraction of the whole channel and of its most and least occupied sections along x, (c) the spheres
+for each run, against time, (a) the particle pressure drop pressure_drop_particles (and, for outlines
+of several branches such as the T-junction, means over windows of 10 time units of the total and of
+pressure_drop_branches), (b) the areal fraction of the whole channel, of its most and least occupied
+sections along x and of each branch, (c) the spheres
 deposited on the walls and the particles present, inserted and removed, (d) the last frame.
 
 usage: plot_fouling.py [RESULTS.json] [OUT.png]   (default bench/results/fouling.json)
@@ -24,9 +26,24 @@ for row, (name, r) in enumerate(runs.items()):
     t = np.array(s["time"])
     dp = np.array(s["pressure_drop_particles"])
     a = ax[row]
-    a[0].plot(t, dp, "C0.-")
+    branch_dp = np.array(s.get("pressure_drop_branches", []))
+    branch_areal = np.array(s.get("areal_fraction_branches", []))
+    several = branch_dp.ndim == 2 and branch_dp.shape[1] > 1
+    a[0].plot(t, dp, ".-", color="0.75" if several else "C0", lw=0.8, label="pressure_drop_particles (frames)")
+    if several:
+        # Means over windows of 10 time units: the total and each branch (branch 0 holds the inlet).
+        edges = np.arange(0.5, t[-1] + 10, 10.0)
+        mid = 0.5 * (edges[:-1] + edges[1:])
+        def windows(y):
+            return np.array([y[(t >= lo) & (t < hi)].mean() if np.any((t >= lo) & (t < hi)) else np.nan
+                             for lo, hi in zip(edges[:-1], edges[1:])])
+        a[0].plot(mid, windows(dp), "k-", lw=2, label="total, means over 10 t")
+        names = ["main (branch 0)", "side (branch 1)"] + [f"branch {b}" for b in range(2, branch_dp.shape[1])]
+        for b in range(branch_dp.shape[1]):
+            a[0].plot(mid, windows(branch_dp[:, b]), f"C{b}-", lw=2, label=f"{names[b]}, means over 10 t")
+        a[0].legend(fontsize=8)
     a[0].axhline(0, color="0.6", lw=0.8)
-    a[0].set_ylabel("pressure_drop_particles [kT/a³]")
+    a[0].set_ylabel("particle pressure drop [kT/a³]")
     # The first frame holds the start's transient (spheres being pulled onto the walls); its value
     # is written beside the axis when it is off the scale of the rest.
     if len(dp) > 2 and abs(dp[0]) > 3 * np.max(np.abs(dp[1:])):
@@ -36,6 +53,9 @@ for row, (name, r) in enumerate(runs.items()):
     a[1].plot(t, sec.mean(axis=1), "k-", label="mean over the sections")
     a[1].plot(t, sec.max(axis=1), "C3--", label="most occupied section")
     a[1].plot(t, sec.min(axis=1), "C2:", label="least occupied section")
+    if several:
+        for b in range(branch_areal.shape[1]):
+            a[1].plot(t, branch_areal[:, b], f"C{b}-", lw=1.5, label=names[b])
     a[1].set_ylabel("areal fraction")
     a[1].legend(fontsize=8)
     a[2].plot(t, s["deposited"], "C1.-", label=f"deposited (gap < {r['contact_gap']} a to a wall)")

@@ -178,6 +178,9 @@ class BulkStress final : public Observer {
 //   wall_force: sum of F over the wall particles.
 //   pressure_drop_particles (slit, duct): -sum_{held} F_x / A over every held particle (walls and any
 //     fixed obstacle), A the cross-section (Lee et al. 2024 §3.2, read as in method note P17).
+//   Outline: the same along the inlet's inward normal; per branch (engine/core/outline.hpp)
+//     pressure_drop_branches = -sum_{held in b} F . d_b / (width_b x depth) and
+//     areal_fraction_branches = sum_{interior in b} pi a^2 / (fluid area of b).
 //   wall_shear_stress, wall_normal_stress [walls][sections]: per wall (slit: bottom, top; duct: also
 //     the side walls at -z, +z) and per section along x, the fluid's streamwise force on its wall
 //     particles per wall area, sum(-F_x) / A_ws, and the force pushing them out of the fluid,
@@ -212,6 +215,7 @@ class ChannelOutputs final : public Observer {
       for (int k = 0; k < sections_; ++k)
         section_area_.push_back(o_.area_between(lo + len_ * k / sections_, lo + len_ * (k + 1) / sections_));
       streamwise_ = -o_.outward_normal(std::size_t(o_.inlet));
+      branches_ = outline_branches(o_);
     }
   }
   void observe(const State& s, const Evaluation& ev, Frame& f) const override {
@@ -227,16 +231,23 @@ class ChannelOutputs final : public Observer {
     const std::size_t n = s.size(), ns = std::size_t(sections_), nw = wall_edge_.size();
     Vec3 wall = Vec3::Zero();
     double held_s = 0.0;
+    const std::vector<OutlineBranch>& br = branches_.branch;
     std::vector<double> shear(nw * ns, 0.0), normal(nw * ns, 0.0), areal(ns, 0.0);
+    std::vector<double> branch_drop(br.size(), 0.0), branch_areal(br.size(), 0.0);
     for (std::size_t i = 0; i < n && i < ev.hydro.F.size(); ++i) {
       const Vec3& F = ev.hydro.F[i];
       const Vec2 x(s.position[i].x(), s.position[i].y()), F2(F.x(), F.y());
-      if (!s.fixed.empty() && s.fixed[i]) held_s += F2.dot(streamwise_);
+      const bool held = !s.fixed.empty() && s.fixed[i];
+      if (held) held_s += F2.dot(streamwise_);
       if (i < n - walls_) {
         areal[section(x.x())] += kPi * s.radius[i] * s.radius[i];
+        const long b = branches_.of_point(x);
+        if (b >= 0 && o_.contains(x)) branch_areal[std::size_t(b)] += kPi * s.radius[i] * s.radius[i];
+        if (b >= 0 && held) branch_drop[std::size_t(b)] -= F2.dot(br[std::size_t(b)].direction);
         continue;
       }
       wall += F;
+      if (const long b = branches_.of_wall_particle(o_, x); b >= 0) branch_drop[std::size_t(b)] -= F2.dot(br[std::size_t(b)].direction);
       const std::size_t e = o_.nearest_wall(x);
       const std::size_t w = std::size_t(std::find(wall_edge_.begin(), wall_edge_.end(), e) - wall_edge_.begin());
       const Vec2 t = (o_.b(e) - o_.a(e)).normalized();
@@ -257,6 +268,13 @@ class ChannelOutputs final : public Observer {
     f.observables["wall_normal_stress"] = Field{{nw_, sections_}, normal, units::stress, false};
     f.set_scalar("pressure_drop_particles", -held_s / area_, units::stress);
     f.observables["areal_fraction_sections"] = Field{{sections_}, areal, "", false};
+    for (std::size_t b = 0; b < br.size(); ++b) {
+      branch_drop[b] /= br[b].width * c_.depth;
+      branch_areal[b] /= br[b].area > 0 ? br[b].area : 1.0;
+    }
+    const int nb = int(br.size());
+    f.observables["pressure_drop_branches"] = Field{{nb}, branch_drop, units::stress, false};
+    f.observables["areal_fraction_branches"] = Field{{nb}, branch_areal, "", false};
   }
   void observe_straight(const State& s, const Evaluation& ev, Frame& f) const {
     const std::size_t n = s.size();
@@ -326,6 +344,7 @@ class ChannelOutputs final : public Observer {
   double x0_ = 0.0, len_ = 1.0;
   Outline o_;
   std::vector<std::size_t> wall_edge_;
+  OutlineBranches branches_;
   std::vector<double> section_area_;
   Vec2 streamwise_ = Vec2(1.0, 0.0);
 };

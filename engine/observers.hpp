@@ -15,7 +15,8 @@
 //                 stresslet_sum (FTS: sum of the stresslets, 6 components); periodic boxes: stress and
 //                 stress_<part> (engine/stress.hpp), brownian_samples, and in simple shear
 //                 relative_viscosity[_<part>], N1[_<part>], N2[_<part>]; scenes with [walls]:
-//                 wall_force and (slit, duct) pressure_drop_particles (docs/output.md, docs/channels.md).
+//                 wall_force and (slit, duct, outline) pressure_drop_particles; outline:
+//                 pressure_drop_branches, areal_fraction_branches (docs/output.md, docs/channels.md).
 #include "engine/core/frame.hpp"
 #include "engine/core/registry.hpp"
 #include "engine/core/scene.hpp"

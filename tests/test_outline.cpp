@@ -275,3 +275,129 @@ steps = 10
   }
   CHECK(moved > 1e-3);  // the Brownian steps did move the spheres, in the plane
 }
+
+TEST_CASE("outline branches: openings grouped into channels, owned areas, wall particles") {
+  // [L24]'s T: main channel [0, 100] x [0, 20] (inlet edge 7, outlet edge 5), side branch
+  // [50, 70] x [-40, 0] (outlet edge 2). Owned areas by elementary geometry: main 100 x 20 (the
+  // crossing included), side 20 x 40.
+  const Outline t = make_outline(outline({{0, 0}, {50, 0}, {50, -40}, {70, -40}, {70, 0}, {100, 0}, {100, 20}, {0, 20}}, {2, 5, 7}, 7));
+  const OutlineBranches tb = outline_branches(t);
+  REQUIRE(tb.branch.size() == 2);
+  CHECK(tb.branch[0].openings == std::vector<std::size_t>{7, 5});
+  CHECK(tb.branch[1].openings == std::vector<std::size_t>{2});
+  CHECK(tb.branch[0].direction.isApprox(Vec2(1, 0)));
+  CHECK(tb.branch[1].direction.isApprox(Vec2(0, -1)));
+  CHECK(tb.branch[0].width == doctest::Approx(20.0));
+  CHECK(tb.branch[1].width == doctest::Approx(20.0));
+  CHECK(tb.branch[0].area == doctest::Approx(2000.0).epsilon(1e-9));
+  CHECK(tb.branch[1].area == doctest::Approx(800.0).epsilon(1e-9));
+  CHECK(tb.of_point(Vec2(30, 10)) == 0);
+  CHECK(tb.of_point(Vec2(60, 10)) == 0);  // the crossing
+  CHECK(tb.of_point(Vec2(90, 5)) == 0);
+  CHECK(tb.of_point(Vec2(60, -20)) == 1);
+  // Wall particles (radius 1, centres 1.05 a outside the outline): side walls, the top wall over
+  // the crossing, the main channel's floor.
+  CHECK(tb.of_wall_particle(t, Vec2(48.95, -20)) == 1);
+  CHECK(tb.of_wall_particle(t, Vec2(71.05, -30)) == 1);
+  CHECK(tb.of_wall_particle(t, Vec2(60, 21.05)) == 0);
+  CHECK(tb.of_wall_particle(t, Vec2(30, -1.05)) == 0);
+
+  // A stem fed from below into a bar with an outlet at each end: three branches, the arms split
+  // at the stem (stem 10 x 30 + the 10 x 10 crossing; right arm 20 x 10; left arm 10 x 10).
+  const Outline s = make_outline(tee(15, 25));
+  const OutlineBranches sb = outline_branches(s);
+  REQUIRE(sb.branch.size() == 3);
+  CHECK(sb.branch[1].openings == std::vector<std::size_t>{3});
+  CHECK(sb.branch[0].area == doctest::Approx(400.0).epsilon(1e-9));
+  CHECK(sb.branch[1].area == doctest::Approx(200.0).epsilon(1e-9));
+  CHECK(sb.branch[2].area == doctest::Approx(100.0).epsilon(1e-9));
+  CHECK(sb.of_point(Vec2(10, 5)) == 1);
+  CHECK(sb.of_point(Vec2(-10, 5)) == 2);
+  CHECK(sb.of_point(Vec2(0, 5)) == 0);
+  CHECK(sb.of_wall_particle(s, Vec2(-10, 11.05)) == 2);  // the bar's top wall over the left arm
+  CHECK(sb.of_wall_particle(s, Vec2(0, 11.05)) == 0);    // ... over the stem
+
+  // The contraction: one branch owning all the fluid.
+  const Outline c = make_outline(contraction());
+  const OutlineBranches cb = outline_branches(c);
+  REQUIRE(cb.branch.size() == 1);
+  CHECK(cb.branch[0].openings.size() == 2);
+  CHECK(cb.branch[0].area == doctest::Approx(c.area).epsilon(1e-9));
+  CHECK(cb.branch[0].width == doctest::Approx(40.0));
+}
+
+TEST_CASE("outline branch outputs: pressure drop and areal fraction per channel") {
+  // Far-field constrained solves of the first frame. References: an empty channel holds no force;
+  // with one channel the branch's drop is pressure_drop_particles (the same holding forces along
+  // the inlet); an obstacle held in one channel raises that channel's drop far above the other's;
+  // areal fractions from the placed spheres and the owned areas (2000 and 800 a^2).
+  const std::string tj = R"(
+[walls]
+kind = "outline"
+outline = [[0, 0], [50, 0], [50, -40], [70, -40], [70, 0], [100, 0], [100, 20], [0, 20]]
+openings = [2, 5, 7]
+inlet = 7
+[flow]
+kind = "poiseuille"
+mean_velocity = 1.0
+[hydrodynamics]
+model = "far_field"
+moments = "FT"
+tolerance = 1e-6
+[time]
+dt = 0.01
+steps = 1
+)";
+  auto first_frame = [](const Scene& sc) {
+    Simulation sim(sc);
+    const State st = sim.initial_state();
+    return sim.frame(st, sim.evaluate(st, st.position));
+  };
+  auto values = [](const Frame& f, const std::string& name) { return f.observables.at(name).values; };
+  {
+    // Three free spheres (two in the main channel, one in the side branch): areal fractions.
+    const Scene sc = io::parse_scene(tj + "[particles]\npositions = [[30, 10, 0], [90, 10, 0], [60, -20, 0]]\n", "tj.toml");
+    const Frame f = first_frame(sc);
+    const auto areal = values(f, "areal_fraction_branches");
+    REQUIRE(areal.size() == 2);
+    CHECK(areal[0] == doctest::Approx(2.0 * kPi / 2000.0).epsilon(1e-9));
+    CHECK(areal[1] == doctest::Approx(kPi / 800.0).epsilon(1e-9));
+  }
+  for (int where = 0; where < 2; ++where) {
+    // One held obstacle, in the main channel upstream of the crossing or deep in the side branch.
+    const std::string pos = where == 0 ? "[[25, 10, 0]]" : "[[60, -25, 0]]";
+    const Scene sc = io::parse_scene(tj + "[particles]\npositions = " + pos + "\nfixed = [true]\n", "tj.toml");
+    const Frame f = first_frame(sc);
+    const auto dp = values(f, "pressure_drop_branches");
+    REQUIRE(dp.size() == 2);
+    MESSAGE("obstacle in the " << (where == 0 ? "main" : "side") << " channel: drops main " << dp[0] << ", side " << dp[1]);
+    CHECK(dp[where] > 0.0);
+    CHECK(std::abs(dp[1 - where]) < 0.1 * dp[where]);
+  }
+  {
+    const std::string ct = R"(
+[walls]
+kind = "outline"
+outline = [[0, -20], [60, -20], [60, -5], [120, -5], [120, 5], [60, 5], [60, 20], [0, 20]]
+openings = [3, 7]
+inlet = 7
+[flow]
+kind = "poiseuille"
+mean_velocity = 1.0
+[hydrodynamics]
+model = "far_field"
+moments = "FT"
+[time]
+dt = 0.01
+steps = 1
+)";
+    const Frame empty = first_frame(io::parse_scene(ct + "[particles]\npositions = [[30, 0, 0]]\n", "ct.toml"));
+    // A force- and torque-free sphere at FT sends no disturbance, and the walls see no ambient flow.
+    CHECK(values(empty, "pressure_drop_branches")[0] == 0.0);
+    const Frame f = first_frame(io::parse_scene(ct + "[particles]\npositions = [[55, 10, 0], [90, 0, 0]]\nfixed = [true, false]\n", "ct.toml"));
+    const auto dp = values(f, "pressure_drop_branches");
+    REQUIRE(dp.size() == 1);
+    CHECK(dp[0] > 0.0);
+    CHECK(dp[0] == doctest::Approx(values(f, "pressure_drop_particles")[0]).epsilon(1e-12));
+  }
+}

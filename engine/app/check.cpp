@@ -341,6 +341,19 @@ int check(Simulation& sim, const CheckOptions& opt, std::FILE* out) {
     const double area = cross_section_area(s.walls, s.domain);
     if (area > 0) std::fprintf(out, "; cross-section %.4g a^2 (pressure_drop_particles)", area);
     std::fprintf(out, "\n");
+    if (s.walls.kind == ChannelParams::Kind::outline) {
+      // The channels of pressure_drop_branches and areal_fraction_branches (engine/core/outline.hpp).
+      const Outline o = make_outline(s.walls);
+      const OutlineBranches br = outline_branches(o);
+      for (std::size_t b = 0; b < br.branch.size(); ++b) {
+        const OutlineBranch& B = br.branch[b];
+        std::fprintf(out, "  branch %zu (pressure_drop_branches, areal_fraction_branches [%zu]): opening%s", b, b,
+                     B.openings.size() > 1 ? "s" : "");
+        for (std::size_t k = 0; k < B.openings.size(); ++k) std::fprintf(out, "%s%zu", k ? ", " : " ", B.openings[k]);
+        std::fprintf(out, ", flow along (%.3g, %.3g), width %.4g a, fluid area %.4g a^2\n", B.direction.x(),
+                     B.direction.y(), B.width, B.area);
+      }
+    }
     if (s.inflow.enabled) {
       const Inflow in(s);
       std::fprintf(out,

@@ -15,6 +15,24 @@ namespace {
 
 double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
 
+// Sutherland-Hodgman: the part of polygon `in` where n . p >= c (n any vector).
+std::vector<Vec2> clip_half_plane(const std::vector<Vec2>& in, const Vec2& n, double c) {
+  std::vector<Vec2> out;
+  for (std::size_t k = 0; k < in.size(); ++k) {
+    const Vec2 P = in[k], Q = in[(k + 1) % in.size()];
+    const double fp = n.dot(P) - c, fq = n.dot(Q) - c;
+    if (fp >= 0) out.push_back(P);
+    if ((fp >= 0) != (fq >= 0)) out.push_back(P + fp / (fp - fq) * (Q - P));
+  }
+  return out;
+}
+
+double polygon_area(const std::vector<Vec2>& p) {
+  double A2 = 0;
+  for (std::size_t k = 0; k < p.size(); ++k) A2 += cross2(p[k], p[(k + 1) % p.size()]);
+  return 0.5 * std::abs(A2);
+}
+
 double segment_distance(const Vec2& p, const Vec2& a, const Vec2& b) {
   const Vec2 d = b - a;
   const double t = std::clamp((p - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
@@ -71,21 +89,7 @@ std::size_t Outline::nearest_wall(const Vec2& p) const {
 }
 
 double Outline::area_between(double x0, double x1) const {
-  // Sutherland-Hodgman clipping against x >= x0, then x <= x1; shoelace area.
-  auto clip = [](const std::vector<Vec2>& in, double x, double side) {
-    std::vector<Vec2> out;
-    for (std::size_t k = 0; k < in.size(); ++k) {
-      const Vec2 P = in[k], Q = in[(k + 1) % in.size()];
-      const bool pin = side * (P.x() - x) >= 0, qin = side * (Q.x() - x) >= 0;
-      if (pin) out.push_back(P);
-      if (pin != qin) out.push_back(P + (x - P.x()) / (Q.x() - P.x()) * (Q - P));
-    }
-    return out;
-  };
-  const std::vector<Vec2> c = clip(clip(v, x0, 1.0), x1, -1.0);
-  double A2 = 0;
-  for (std::size_t k = 0; k < c.size(); ++k) A2 += cross2(c[k], c[(k + 1) % c.size()]);
-  return 0.5 * std::abs(A2);
+  return polygon_area(clip_half_plane(clip_half_plane(v, Vec2(1, 0), x0), Vec2(-1, 0), -x1));
 }
 
 Outline make_outline(const ChannelParams& c) {
@@ -127,6 +131,91 @@ Outline make_outline(const ChannelParams& c) {
     throw std::invalid_argument(s.str());
   }
   return o;
+}
+
+long OutlineBranches::of_point(const Vec2& p, bool on_wall) const {
+  const double e = on_wall ? eps : 0.0;
+  for (std::size_t b = 0; b < branch.size(); ++b) {
+    const OutlineBranch& B = branch[b];
+    if (!B.holds(p, e)) continue;
+    for (double at : B.at) {
+      // The path p + t d, t between 0 and T, to the opening's line; does it enter a strip S_c that
+      // does not hold p? s_c(p + t d) = s_c(p) + t s_c(d) (s_c linear).
+      const double T = at - B.direction.dot(p);
+      const double t0 = std::min(0.0, T), t1 = std::max(0.0, T);
+      bool blocked = false;
+      for (std::size_t c = 0; c < branch.size() && !blocked; ++c) {
+        const OutlineBranch& C = branch[c];
+        if (c == b || C.holds(p, e)) continue;
+        const double g0 = C.across(p), g1 = C.across(B.direction);
+        if (std::abs(g1) < 1e-12) continue;  // parallel to the strip: never enters it
+        double ta = (C.lo - g0) / g1, tb = (C.hi - g0) / g1;
+        if (ta > tb) std::swap(ta, tb);
+        blocked = std::min(tb, t1) - std::max(ta, t0) > eps;
+      }
+      if (!blocked) return long(b);
+    }
+  }
+  return -1;
+}
+
+long OutlineBranches::of_wall_particle(const Outline& o, const Vec2& p) const {
+  const std::size_t k = o.nearest_wall(p);
+  const Vec2 A = o.a(k), D = o.b(k) - A;
+  const double t = std::clamp((p - A).dot(D) / D.squaredNorm(), 0.0, 1.0);
+  return of_point(A + t * D, true);
+}
+
+OutlineBranches outline_branches(const Outline& o) {
+  OutlineBranches r;
+  const std::size_t n = o.edges();
+  Vec2 lo = o.v[0], hi = o.v[0];
+  for (const Vec2& p : o.v) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  r.eps = 1e-9 * (1.0 + std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff()));
+  // The inlet first, then the outlets in edge order.
+  std::vector<std::size_t> order{std::size_t(o.inlet)};
+  for (std::size_t k = 0; k < n; ++k)
+    if (o.open[k] && long(k) != o.inlet) order.push_back(k);
+  double narrowest = std::numeric_limits<double>::infinity();
+  for (std::size_t k : order) {
+    narrowest = std::min(narrowest, o.length(k));
+    OutlineBranch ob;
+    ob.direction = long(k) == o.inlet ? Vec2(-o.outward_normal(k)) : o.outward_normal(k);
+    const double s0 = ob.across(o.a(k)), s1 = ob.across(o.b(k));
+    ob.lo = std::min(s0, s1);
+    ob.hi = std::max(s0, s1);
+    const double at = ob.direction.dot(0.5 * (o.a(k) + o.b(k)));
+    bool merged = false;
+    for (OutlineBranch& b : r.branch)
+      if (b.direction.dot(ob.direction) > 1.0 - 1e-9 && ob.lo <= b.hi + r.eps && ob.hi >= b.lo - r.eps) {
+        b.lo = std::min(b.lo, ob.lo);
+        b.hi = std::max(b.hi, ob.hi);
+        b.openings.push_back(k);
+        b.at.push_back(at);
+        merged = true;
+        break;
+      }
+    if (merged) continue;
+    ob.width = o.length(k);
+    ob.openings.push_back(k);
+    ob.at.push_back(at);
+    r.branch.push_back(ob);
+  }
+  // Areas by cell-centre sampling (header).
+  const double h = std::max(narrowest / 200.0, std::sqrt((hi.x() - lo.x()) * (hi.y() - lo.y()) / 4e6));
+  const long nx = long(std::ceil((hi.x() - lo.x()) / h)), ny = long(std::ceil((hi.y() - lo.y()) / h));
+  std::vector<double> area(r.branch.size(), 0.0);
+  for (long j = 0; j < ny; ++j)
+    for (long i = 0; i < nx; ++i) {
+      const Vec2 p = lo + h * Vec2(double(i) + 0.5, double(j) + 0.5);
+      if (!o.contains(p)) continue;
+      if (const long b = r.of_point(p); b >= 0) area[std::size_t(b)] += h * h;
+    }
+  for (std::size_t b = 0; b < r.branch.size(); ++b) r.branch[b].area = area[b];
+  return r;
 }
 
 namespace {

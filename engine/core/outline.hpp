@@ -63,6 +63,41 @@ struct Outline {
   double area_between(double x0, double x1) const;
 };
 
+// Branches: the straight channels an outline's openings feed ([L24] §3.3 reports the T-junction's
+// pressure drop and areal fraction per channel, "main" and "side"). Each opening has a flow
+// direction d (inlet: its inward normal; outlets: their outward normals) and a span [lo, hi] of the
+// coordinate s = p . (-d_y, d_x) across it. Openings with the same direction (d . d' > 1 - 1e-9)
+// and overlapping spans form one branch (the main channel's inlet and outlet), whose strip is the
+// union of their spans. Branch 0 holds the inlet, the others follow in the order of their lowest
+// opening edge. A point p belongs to the first branch whose strip holds p and from which p reaches
+// one of the branch's openings along d without entering another branch's strip (strips that hold p
+// themselves do not count). So the crossing of a T belongs to the branch listed first, and the two
+// arms of a bar fed from a stem between them are two branches. A wall particle belongs to the branch
+// of its foot point on its nearest wall edge (strip edges widened by 1e-9 of the outline's size).
+// A branch's cross-section width is that of its defining opening (the inlet for branch 0).
+struct OutlineBranch {
+  Vec2 direction = Vec2(1.0, 0.0);   // unit flow direction
+  double lo = 0, hi = 0;             // strip: lo <= p . (-d_y, d_x) <= hi
+  double width = 0;                  // cross-section width [a]
+  double area = 0;                   // fluid area of the points it owns [a^2]
+  std::vector<std::size_t> openings; // its opening edges, the defining one first
+  std::vector<double> at;            // d . (the opening's midpoint), per opening
+  double across(const Vec2& p) const { return -direction.y() * p.x() + direction.x() * p.y(); }
+  bool holds(const Vec2& p, double eps = 0.0) const { return across(p) >= lo - eps && across(p) <= hi + eps; }
+};
+struct OutlineBranches {
+  std::vector<OutlineBranch> branch;
+  double eps = 0;  // strip widening for points on a wall
+  // The branch owning point p (-1: none); `on_wall` widens the strips by eps.
+  long of_point(const Vec2& p, bool on_wall = false) const;
+  // The branch of a wall particle at p (its foot on the nearest wall edge of o).
+  long of_wall_particle(const Outline& o, const Vec2& p) const;
+};
+// Groups the openings into branches and measures the area each owns (cell-centre sampling on a grid
+// of spacing h = (narrowest opening) / 200 anchored at the lowest vertex: exact when the vertices
+// lie on that grid and the edges follow its lines, otherwise within O(h / width) relative).
+OutlineBranches outline_branches(const Outline& o);
+
 // Builds and checks the outline of a kind = "outline" channel; throws std::invalid_argument naming
 // the problem (fewer than 3 vertices, zero-length or crossing edges, opening indices).
 Outline make_outline(const ChannelParams& c);
