@@ -118,6 +118,7 @@ Frame Inflow::expand(const Frame& f, const State& s, const std::vector<std::size
   out.set_count("inflow_inserted", s.inflow.inserted);
   out.set_count("inflow_removed", s.inflow.removed);
   out.set_count("inflow_deferred", s.inflow.deferred);
+  out.set_count("inflow_redrawn", s.inflow.redrawn);
   return out;
 }
 
@@ -148,23 +149,42 @@ void Inflow::exchange(State& s, double dt, std::uint64_t seed) const {
       return;
     }
     // The due particle keeps its place along the inlet until it fits (resampling a blocked place
-    // would favour the fast centre of the inlet, where neighbours clear away sooner).
+    // would favour the fast centre of the inlet, where neighbours clear away sooner), for at most
+    // (2r + g)/u(s); then it passes a stuck blocker at up to kPasses new places (inflow.hpp).
     if (s.inflow.pending < 0.0) s.inflow.pending = sample_inlet_coordinate(rng);
-    const double sc = s.inflow.pending;
-    const double speed = 6.0 * mean_ * sc * (1.0 - sc);
-    const Vec2 c2 = start_ + tangent_ * (sc * width_) + inward_ * (radius_ + gap_ + rng.uniform() * speed * dt);
-    const Vec3 c(c2.x(), c2.y(), 0.0);
-    bool clear = o_.distance(c2, true) >= radius_ + gap_ - 1e-12;
-    for (std::size_t j = 0; j < s.size() && clear; ++j)
-      if (s.id[j] >= 0 && (s.position[j] - c).norm() < radius_ + s.radius[j] + gap_) clear = false;
-    if (!clear) {
+    auto place = [&](double sc) {
+      const double speed = 6.0 * mean_ * sc * (1.0 - sc);
+      const Vec2 c2 = start_ + tangent_ * (sc * width_) + inward_ * (radius_ + gap_ + rng.uniform() * speed * dt);
+      return Vec3(c2.x(), c2.y(), 0.0);
+    };
+    auto fits = [&](const Vec3& c) {
+      if (o_.distance(Vec2(c.x(), c.y()), true) < radius_ + gap_ - 1e-12) return false;
+      for (std::size_t j = 0; j < s.size(); ++j)
+        if (s.id[j] >= 0 && (s.position[j] - c).norm() < radius_ + s.radius[j] + gap_) return false;
+      return true;
+    };
+    Vec3 c = place(s.inflow.pending);
+    if (!fits(c)) {
       ++s.inflow.deferred;
-      return;
+      s.inflow.waited += dt;
+      const double sc = s.inflow.pending;
+      if (s.inflow.waited < (2.0 * radius_ + gap_) / (6.0 * mean_ * sc * (1.0 - sc))) return;
+      ++s.inflow.redrawn;
+      s.inflow.waited = 0.0;
+      constexpr int kPasses = 20;
+      bool placed = false;
+      for (int k = 0; k < kPasses && !placed; ++k) {
+        s.inflow.pending = sample_inlet_coordinate(rng);
+        c = place(s.inflow.pending);
+        placed = fits(c);
+      }
+      if (!placed) return;  // waits at the last place drawn
     }
     s.position[slot] = c;
     s.radius[slot] = radius_;
     s.id[slot] = s.inflow.next_id++;
     s.inflow.pending = -1.0;
+    s.inflow.waited = 0.0;
     s.inflow.credit -= 1.0;
     ++s.inflow.inserted;
   }

@@ -23,7 +23,14 @@
 // particle that crossed during the step would be), if it keeps a surface gap g from every particle
 // and wall particle present. If it does not fit, or no slot is empty, it waits for the next step at
 // the same s (State::InflowTally::pending; a new s for a blocked one would favour the inlet's fast
-// centre, which neighbours leave sooner) and the step counts as deferred (inflow_deferred).
+// centre, which neighbours leave sooner) and the step counts as deferred (inflow_deferred). A
+// neighbour carried by the flow clears the place within about (2r + g)/u(s), the time the flow at s
+// takes to move it by a diameter and the gap. A place still blocked after that wait is held by a
+// particle stuck at the inlet (deposited on its corner or a wall): the due particle then passes it
+// at a new s, drawn up to 20 times in that step until one fits (inflow_redrawn), as the incoming
+// suspension's streamlines pass an obstacle; if none fits it waits at the last one. The
+// wait keeps the bias towards the centre small; without a bound, one deposit at the inlet would
+// stop the inflow for good (it did in the fouling runs of 2026-11-28 from t ~ 65).
 // The draws of step n use the stream (seed, inflow, n): runs are reproducible and resumable.
 //
 // Removal. A particle whose centre is outside the outline after a step has left through an

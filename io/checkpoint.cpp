@@ -124,6 +124,8 @@ void write_checkpoint(const std::string& path, const Checkpoint& c) {
     values["state.inflow.inserted"] = double(s.inflow.inserted);
     values["state.inflow.removed"] = double(s.inflow.removed);
     values["state.inflow.deferred"] = double(s.inflow.deferred);
+    values["state.inflow.waited"] = s.inflow.waited;
+    values["state.inflow.redrawn"] = double(s.inflow.redrawn);
   }
   w.u64(values.size());
   for (const auto& [k, v] : values) {
@@ -237,6 +239,10 @@ Checkpoint read_checkpoint(const std::string& path) {
       s.inflow.removed = std::int64_t(it->second);
     } else if (k == "state.inflow.deferred") {
       s.inflow.deferred = std::int64_t(it->second);
+    } else if (k == "state.inflow.waited") {  // absent in checkpoints before 2026-11-28: 0
+      s.inflow.waited = it->second;
+    } else if (k == "state.inflow.redrawn") {
+      s.inflow.redrawn = std::int64_t(it->second);
     } else {
       throw IoError(path + ": checkpoint holds an unknown state value " + k + " (written by a newer version?)");
     }

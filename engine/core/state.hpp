@@ -44,9 +44,11 @@ struct State {
   struct InflowTally {
     double credit = 0.0;         // particles due at the inlet and not yet placed
     double pending = -1.0;       // place along the inlet (s in [0, 1]) of the next one; -1: not drawn
+    double waited = 0.0;         // time the next one has waited at `pending`
     std::int64_t next_id = 0;    // serial number of the next particle
     std::int64_t inserted = 0, removed = 0;
     std::int64_t deferred = 0;   // steps whose due particles could not all be placed
+    std::int64_t redrawn = 0;    // due particles whose blocked place was given up for a new one
   } inflow;
   std::size_t size() const { return position.size(); }
 };
