@@ -3,8 +3,11 @@
 #include "engine/core/errors.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -32,6 +35,213 @@ std::size_t position_of(const std::vector<double>& ax, double v) {
   return std::size_t(it - ax.begin());
 }
 
+// Legacy VTK (header of flow_table.hpp): a cursor over the file's bytes that reads
+// whitespace-separated tokens (ASCII) or big-endian binary values.
+class VtkReader {
+ public:
+  VtkReader(const std::string& path, const std::string& text) : path_(path), t_(text) {}
+  long line() const { return long(std::count(t_.begin(), t_.begin() + long(p_), '\n')) + 1; }
+  [[noreturn]] void fail(const std::string& what) const { io::fail(path_, line(), what); }
+  bool at_end() {
+    skip_space();
+    return p_ >= t_.size();
+  }
+  std::string token() {
+    skip_space();
+    if (p_ >= t_.size()) fail("the file ends early (legacy VTK)");
+    const std::size_t b = p_;
+    while (p_ < t_.size() && !std::isspace(static_cast<unsigned char>(t_[p_]))) ++p_;
+    return t_.substr(b, p_ - b);
+  }
+  std::string rest_of_line() {
+    const std::size_t b = p_, e = t_.find('\n', p_);
+    p_ = e == std::string::npos ? t_.size() : e + 1;
+    return t_.substr(b, (e == std::string::npos ? t_.size() : e) - b);
+  }
+  long integer(const char* what) {
+    const std::string s = token();
+    char* end = nullptr;
+    const long v = std::strtol(s.c_str(), &end, 10);
+    if (end == s.c_str() || *end != '\0' || v < 0) fail(std::string(what) + ": \"" + s + "\" is not a count");
+    return v;
+  }
+  double number(const char* what) {
+    const std::string s = token();
+    char* end = nullptr;
+    const double v = std::strtod(s.c_str(), &end);
+    if (end == s.c_str() || *end != '\0') fail(std::string(what) + ": \"" + s + "\" is not a number");
+    return v;
+  }
+  // n values of VTK type `type` (ASCII tokens, or big-endian bytes after the header's line end).
+  std::vector<double> values(std::size_t n, const std::string& type, bool binary, const std::string& what) {
+    std::vector<double> v(n);
+    if (!binary) {
+      for (double& x : v) x = number(what.c_str());
+      return v;
+    }
+    rest_of_line();  // the binary block starts after the line naming it
+    const std::size_t size = type == "double" ? 8 : type == "float" ? 4 : type == "int" || type == "unsigned_int" ? 4
+                           : type == "short" || type == "unsigned_short" ? 2 : type == "char" || type == "unsigned_char" ? 1 : 0;
+    if (size == 0) fail(what + ": binary data of type \"" + type + "\" is not read (float, double, int, short, char)");
+    if (p_ + n * size > t_.size()) fail(what + ": the file ends inside its binary data");
+    for (std::size_t k = 0; k < n; ++k) {
+      std::uint64_t bits = 0;
+      for (std::size_t b = 0; b < size; ++b) bits = bits << 8 | static_cast<unsigned char>(t_[p_ + k * size + b]);
+      if (type == "double") {
+        double d;
+        std::memcpy(&d, &bits, 8);
+        v[k] = d;
+      } else if (type == "float") {
+        const std::uint32_t b32 = std::uint32_t(bits);
+        float f;
+        std::memcpy(&f, &b32, 4);
+        v[k] = f;
+      } else if (type == "int") {
+        v[k] = double(std::int32_t(std::uint32_t(bits)));
+      } else if (type == "short") {
+        v[k] = double(std::int16_t(std::uint16_t(bits)));
+      } else if (type == "char") {
+        v[k] = double(std::int8_t(std::uint8_t(bits)));
+      } else {
+        v[k] = double(bits);
+      }
+    }
+    p_ += n * size;
+    return v;
+  }
+
+ private:
+  void skip_space() {
+    while (p_ < t_.size() && std::isspace(static_cast<unsigned char>(t_[p_]))) ++p_;
+  }
+  const std::string& path_;
+  const std::string& t_;
+  std::size_t p_ = 0;
+};
+
+FlowGrid read_vtk(const std::string& path, const std::string& text, FlowGrid g) {
+  VtkReader r(path, text);
+  r.rest_of_line();  // "# vtk DataFile Version x.y"
+  r.rest_of_line();  // title
+  const std::string format = r.token();
+  if (format != "ASCII" && format != "BINARY") r.fail("format \"" + format + "\" (allowed: ASCII, BINARY)");
+  const bool binary = format == "BINARY";
+  if (r.token() != "DATASET") r.fail("expected DATASET");
+  const std::string dataset = r.token();
+  if (dataset != "STRUCTURED_POINTS" && dataset != "RECTILINEAR_GRID")
+    r.fail("DATASET " + dataset + " is not read (allowed: STRUCTURED_POINTS, RECTILINEAR_GRID; ParaView's "
+           "Resample To Image turns any mesh into STRUCTURED_POINTS)");
+  long dim[3] = {0, 0, 0};
+  double origin[3] = {0, 0, 0}, spacing[3] = {1, 1, 1};
+  std::array<std::vector<double>, 3> coords;
+  std::size_t points = 0;
+  // Geometry keywords until POINT_DATA.
+  for (;;) {
+    const std::string k = r.token();
+    if (k == "DIMENSIONS") {
+      for (long& d : dim) d = r.integer("DIMENSIONS");
+    } else if (k == "ORIGIN") {
+      for (double& o : origin) o = r.number("ORIGIN");
+    } else if (k == "SPACING" || k == "ASPECT_RATIO") {
+      for (double& h : spacing) h = r.number("SPACING");
+    } else if (k == "X_COORDINATES" || k == "Y_COORDINATES" || k == "Z_COORDINATES") {
+      const int c = k[0] - 'X';
+      const long n = r.integer(k.c_str());
+      const std::string type = r.token();
+      coords[std::size_t(c)] = r.values(std::size_t(n), type, binary, k);
+    } else if (k == "POINT_DATA") {
+      points = std::size_t(r.integer("POINT_DATA"));
+      break;
+    } else if (k == "CELL_DATA") {
+      r.fail("CELL_DATA: the velocity must be given at the points (POINT_DATA)");
+    } else if (k == "FIELD") {
+      r.fail("FIELD data before POINT_DATA is not read");
+    } else {
+      r.fail("unexpected keyword \"" + k + "\" in the geometry of a " + dataset);
+    }
+  }
+  for (int c = 0; c < 3; ++c) {
+    if (dim[c] < 1) r.fail("DIMENSIONS must be three counts of at least 1");
+    std::vector<double>& ax = g.axis[std::size_t(c)];
+    if (dataset == "STRUCTURED_POINTS") {
+      if (!(spacing[c] > 0)) r.fail("SPACING must be positive");
+      ax.resize(std::size_t(dim[c]));
+      for (long i = 0; i < dim[c]; ++i) ax[std::size_t(i)] = origin[c] + double(i) * spacing[c];
+    } else {
+      ax = coords[std::size_t(c)];
+      if (long(ax.size()) != dim[c]) r.fail(std::string(1, char('X' + c)) + "_COORDINATES: " + std::to_string(ax.size()) +
+                                            " values for DIMENSIONS " + std::to_string(dim[c]));
+      for (std::size_t i = 1; i < ax.size(); ++i)
+        if (!(ax[i] > ax[i - 1])) r.fail(std::string(1, char('X' + c)) + "_COORDINATES must increase");
+    }
+  }
+  const std::size_t n = std::size_t(dim[0]) * std::size_t(dim[1]) * std::size_t(dim[2]);
+  if (points != n) r.fail("POINT_DATA " + std::to_string(points) + " for " + std::to_string(n) + " grid points");
+  // Point arrays: 3-component ones are velocity candidates; vtkValidPointMask (ParaView's resampling:
+  // 0 where the point fell outside the solver's mesh) marks points without data.
+  std::vector<std::pair<std::string, std::vector<double>>> vectors;
+  std::vector<double> mask;
+  while (!r.at_end()) {
+    const std::string k = r.token();
+    if (k == "VECTORS" || k == "NORMALS") {
+      const std::string name = r.token(), type = r.token();
+      vectors.emplace_back(name, r.values(3 * n, type, binary, k + " " + name));
+    } else if (k == "SCALARS") {
+      const std::string name = r.token(), type = r.token();
+      std::string next = r.token();
+      long comp = 1;
+      if (next != "LOOKUP_TABLE") {
+        comp = std::strtol(next.c_str(), nullptr, 10);
+        if (comp < 1 || comp > 4) r.fail("SCALARS " + name + ": " + next + " components (allowed: 1 to 4)");
+        next = r.token();
+      }
+      if (next != "LOOKUP_TABLE") r.fail("SCALARS " + name + ": expected LOOKUP_TABLE");
+      r.token();  // the table's name
+      std::vector<double> v = r.values(std::size_t(comp) * n, type, binary, "SCALARS " + name);
+      if (name == "vtkValidPointMask" && comp == 1) mask = std::move(v);
+    } else if (k == "FIELD") {
+      r.token();  // the field's name
+      const long arrays = r.integer("FIELD");
+      for (long a = 0; a < arrays; ++a) {
+        const std::string name = r.token();
+        const long comp = r.integer("FIELD array components"), tuples = r.integer("FIELD array tuples");
+        const std::string type = r.token();
+        std::vector<double> v = r.values(std::size_t(comp) * std::size_t(tuples), type, binary, "FIELD array " + name);
+        if (std::size_t(tuples) != n) continue;  // not a point array
+        if (comp == 3) vectors.emplace_back(name, std::move(v));
+        if (comp == 1 && name == "vtkValidPointMask") mask = std::move(v);
+      }
+    } else if (k == "CELL_DATA") {
+      break;  // cell arrays follow: not needed
+    } else if (k == "METADATA") {
+      // ParaView's INFORMATION blocks end at an empty line; skip to it.
+      for (std::string l = r.rest_of_line(); !r.at_end();) {
+        l = r.rest_of_line();
+        if (l.find_first_not_of(" \t\r") == std::string::npos) break;
+      }
+    } else {
+      r.fail("unexpected keyword \"" + k + "\" in POINT_DATA (read: VECTORS, SCALARS, FIELD)");
+    }
+  }
+  // The velocity: the only 3-component array, or the one named U, u, velocity or Velocity.
+  const std::pair<std::string, std::vector<double>>* vel = vectors.size() == 1 ? &vectors[0] : nullptr;
+  for (const auto& v : vectors)
+    if (!vel && (v.first == "U" || v.first == "u" || v.first == "velocity" || v.first == "Velocity")) vel = &v;
+  if (!vel) {
+    std::string names;
+    for (const auto& v : vectors) names += (names.empty() ? "" : ", ") + v.first;
+    io::fail(path, 0, vectors.empty() ? "no 3-component point array (the velocity) in the VTK file"
+                                      : "which 3-component point array is the velocity? (" + names +
+                                            "; name it U or velocity)");
+  }
+  g.u.resize(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    g.u[k] = Vec3(vel->second[3 * k], vel->second[3 * k + 1], vel->second[3 * k + 2]);
+    if (!mask.empty() && mask[k] == 0.0) g.u[k] = Vec3::Constant(std::nan(""));
+  }
+  return g;
+}
+
 }  // namespace
 
 FlowGrid read_flow_table(const std::string& path) {
@@ -43,6 +253,7 @@ FlowGrid read_flow_table(const std::string& path) {
   std::uint64_t h = 1469598103934665603ull;  // FNV-1a 64
   for (unsigned char c : text) h = (h ^ c) * 1099511628211ull;
   g.hash = h;
+  if (text.rfind("# vtk DataFile", 0) == 0) return read_vtk(path, text, std::move(g));
 
   std::vector<std::array<double, 6>> rows;
   std::vector<long> row_line;

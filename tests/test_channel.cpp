@@ -24,6 +24,7 @@
 #include "tests/support/wall_mobility.hpp"
 #include "trees/walls.hpp"
 
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -427,6 +428,119 @@ TEST_CASE("tabulated flow from a fluid solver's grid: second-order interpolation
     o << "0 0 0 1 0 0\n1 0 0 1 0\n";
   }
   CHECK_THROWS_WITH(io::read_flow_table(p2), doctest::Contains("table2d.txt:2: 5 columns"));
+}
+
+TEST_CASE("tabulated flow from a legacy VTK file: the same grid as the plain table, ASCII and binary") {
+  // Reference: the duct's closed form written as the plain table (read above) and as VTK files of
+  // the same nodes, written here byte by byte from the VTK format's definition (big-endian binary).
+  ChannelParams c;
+  c.kind = ChannelParams::Kind::duct;
+  c.height = 4.0;
+  c.width = 6.0;
+  const ChannelFlow exact(c, Domain{}, 1.0);
+  const FlowGrid ref = io::read_flow_table(write_duct_table(exact, 4.0, 6.0, 0.25, "duct_vtk.csv"));
+  const std::size_t n = ref.u.size();
+  auto big_endian = [](std::ofstream& o, const void* p, std::size_t size) {
+    const unsigned char* b = static_cast<const unsigned char*>(p);
+    for (std::size_t k = 0; k < size; ++k) o.put(char(b[size - 1 - k]));  // this machine is little-endian
+  };
+  auto write = [&](const std::string& name, bool binary, bool rectilinear, const std::string& type, bool extra) {
+    const std::string path = scratch(name);
+    std::ofstream o(path, std::ios::binary);
+    o.precision(17);
+    o << "# vtk DataFile Version 3.0\nduct flow\n" << (binary ? "BINARY" : "ASCII") << "\n";
+    auto put = [&](double v) {
+      if (!binary) {
+        o << v << " ";
+      } else if (type == "float") {
+        const float f = float(v);
+        big_endian(o, &f, 4);
+      } else {
+        big_endian(o, &v, 8);
+      }
+    };
+    const char* dims = "xyz";
+    if (rectilinear) {
+      o << "DATASET RECTILINEAR_GRID\nDIMENSIONS " << ref.axis[0].size() << " " << ref.axis[1].size() << " " << ref.axis[2].size() << "\n";
+      for (int a = 0; a < 3; ++a) {
+        o << char(std::toupper(dims[a])) << "_COORDINATES " << ref.axis[std::size_t(a)].size() << " " << type << "\n";
+        for (double x : ref.axis[std::size_t(a)]) put(x);
+        o << "\n";
+      }
+    } else {
+      o << "DATASET STRUCTURED_POINTS\nDIMENSIONS " << ref.axis[0].size() << " " << ref.axis[1].size() << " " << ref.axis[2].size()
+        << "\nORIGIN " << ref.axis[0][0] << " " << ref.axis[1][0] << " " << ref.axis[2][0] << "\nSPACING "
+        << ref.axis[0][1] - ref.axis[0][0] << " " << ref.axis[1][1] - ref.axis[1][0] << " " << ref.axis[2][1] - ref.axis[2][0] << "\n";
+    }
+    o << "POINT_DATA " << n << "\n";
+    if (extra) {  // ParaView's mask (one point outside the mesh) and a second vector array
+      o << "SCALARS vtkValidPointMask char 1\nLOOKUP_TABLE default\n";
+      for (std::size_t k = 0; k < n; ++k) {
+        if (binary) o.put(char(k == 5 ? 0 : 1));
+        else o << (k == 5 ? 0 : 1) << " ";
+      }
+      o << "\nVECTORS vorticity " << type << "\n";
+      for (std::size_t k = 0; k < 3 * n; ++k) put(1.0);
+      o << "\n";
+    }
+    o << "VECTORS U " << type << "\n";
+    for (const Vec3& u : ref.u)
+      for (int d = 0; d < 3; ++d) put(u[d]);
+    o << "\n";
+    return path;
+  };
+  struct Case {
+    const char* name;
+    bool binary, rectilinear;
+    const char* type;
+    bool extra;
+    double tol;
+  };
+  for (const Case& k : {Case{"a.vtk", false, false, "double", false, 1e-15}, Case{"b.vtk", true, true, "double", true, 0.0},
+                        Case{"c.vtk", true, false, "float", false, 1e-7}, Case{"d.vtk", false, true, "float", true, 1e-15}}) {
+    CAPTURE(k.name);
+    const FlowGrid g = io::read_flow_table(write(k.name, k.binary, k.rectilinear, k.type, k.extra));
+    for (int a = 0; a < 3; ++a) {
+      REQUIRE(g.axis[std::size_t(a)].size() == ref.axis[std::size_t(a)].size());
+      for (std::size_t i = 0; i < ref.axis[std::size_t(a)].size(); ++i)
+        CHECK(std::abs(g.axis[std::size_t(a)][i] - ref.axis[std::size_t(a)][i]) <= 1e-12);
+    }
+    REQUIRE(g.u.size() == n);
+    double err = 0;
+    for (std::size_t j = 0; j < n; ++j) {
+      if (k.extra && j == 5) {
+        CHECK(std::isnan(g.u[j].x()));  // masked point: no data
+        continue;
+      }
+      err = std::max(err, (g.u[j] - ref.u[j]).norm() / exact.max_velocity());
+    }
+    CHECK(err <= k.tol);
+  }
+  // Errors name the file and, where it helps, the line.
+  const std::string bad = scratch("bad.vtk");
+  {
+    std::ofstream o(bad);
+    o << "# vtk DataFile Version 3.0\nmesh\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 3 float\n";
+  }
+  CHECK_THROWS_WITH(io::read_flow_table(bad), doctest::Contains("bad.vtk:4: DATASET UNSTRUCTURED_GRID is not read"));
+  {
+    std::ofstream o(bad);
+    o << "# vtk DataFile Version 3.0\nx\nASCII\nDATASET STRUCTURED_POINTS\nDIMENSIONS 2 2 1\nORIGIN 0 0 0\nSPACING 1 1 1\n"
+      << "POINT_DATA 4\nVECTORS a float\n0 0 0 1 0 0 0 1 0 1 1 0\nVECTORS b float\n0 0 0 0 0 0 0 0 0 0 0 0\n";
+  }
+  CHECK_THROWS_WITH(io::read_flow_table(bad), doctest::Contains("which 3-component point array is the velocity? (a, b"));
+  {
+    std::ofstream o(bad);
+    o << "# vtk DataFile Version 3.0\nx\nASCII\nDATASET STRUCTURED_POINTS\nDIMENSIONS 2 2 1\nORIGIN 0 0 0\nSPACING 1 1 1\n"
+      << "POINT_DATA 4\nVECTORS U float\n0 0 0 1 0 0\n";
+  }
+  CHECK_THROWS_WITH(io::read_flow_table(bad), doctest::Contains("the file ends early"));
+  {
+    std::ofstream o(bad);
+    o << "# vtk DataFile Version 3.0\nx\nBINARY\nDATASET STRUCTURED_POINTS\nDIMENSIONS 2 2 1\nORIGIN 0 0 0\nSPACING 1 1 1\n"
+      << "POINT_DATA 4\nVECTORS U double\n\x01\x02";
+  }
+  CHECK_THROWS_WITH(io::read_flow_table(bad), doctest::Contains("ends inside its binary data"));
 }
 
 TEST_CASE("tabulated flow in a scene: resolved with the file's path and hash; a changed file is refused") {
