@@ -42,6 +42,7 @@ class VtkReader {
   VtkReader(const std::string& path, const std::string& text) : path_(path), t_(text) {}
   long line() const { return long(std::count(t_.begin(), t_.begin() + long(p_), '\n')) + 1; }
   [[noreturn]] void fail(const std::string& what) const { io::fail(path_, line(), what); }
+  bool eof() const { return p_ >= t_.size(); }
   bool at_end() {
     skip_space();
     return p_ >= t_.size();
@@ -214,10 +215,9 @@ FlowGrid read_vtk(const std::string& path, const std::string& text, FlowGrid g) 
     } else if (k == "CELL_DATA") {
       break;  // cell arrays follow: not needed
     } else if (k == "METADATA") {
-      // ParaView's INFORMATION blocks end at an empty line; skip to it.
-      for (std::string l = r.rest_of_line(); !r.at_end();) {
-        l = r.rest_of_line();
-        if (l.find_first_not_of(" \t\r") == std::string::npos) break;
+      // ParaView's METADATA block (INFORMATION entries) ends at an empty line; skip to it.
+      r.rest_of_line();
+      while (!r.eof() && r.rest_of_line().find_first_not_of(" \t\r") != std::string::npos) {
       }
     } else {
       r.fail("unexpected keyword \"" + k + "\" in POINT_DATA (read: VECTORS, SCALARS, FIELD)");

@@ -483,6 +483,7 @@ TEST_CASE("tabulated flow from a legacy VTK file: the same grid as the plain tab
       for (std::size_t k = 0; k < 3 * n; ++k) put(1.0);
       o << "\n";
     }
+    if (extra) o << "METADATA\nINFORMATION 1\nNAME L2_NORM_RANGE LOCATION vtkDataArray\nDATA 2 0 1\n\n";  // as ParaView writes
     o << "VECTORS U " << type << "\n";
     for (const Vec3& u : ref.u)
       for (int d = 0; d < 3; ++d) put(u[d]);
