@@ -7,14 +7,14 @@
 // but a Hertz backstop; the first N - N_I particles (in the generator's order, spread through the
 // box) are held fixed, as [L24]'s "fraction of particles held at zero velocity". Model: Stokesian
 // dynamics, FT, tolerance 1e-3, the Fixman integrator (two solves, near- and far-field noise),
-// solver dense (N <= 1000) and accelerated (all N), PME far field. One step = evaluate at x0 (what
+// solver dense (N <= 500) and accelerated (all N), PME far field. One step = evaluate at x0 (what
 // Simulation::run does) + advance; the first step (set-up) is not timed, then `steps` steps are
 // averaged.
 // Rows: solver (0 dense, 1 accelerated), N, fraction, N_I, threads; phases: seconds (per step),
 // iterations (Krylov iterations of the solve at x0, per step; 0 for the dense solver).
 // The plot script fits exponents per solver and fraction and the speed-up from the constraint
 // (time at fraction 1 over time at fraction f, same N).
-// Usage: bench_channel [--quick] [--out DIR]; full: N = 100 ... 10000 (dense to 1000), 3 steps;
+// Usage: bench_channel [--quick] [--out DIR]; full: N = 100 ... 10000 (dense to 500), 3 steps;
 // --quick: N = 100, 300, 1 step.
 #include "bench/harness.hpp"
 #include "engine/simulation.hpp"
@@ -56,7 +56,7 @@ int main(int argc, char** argv) {
   const int steps = opt.quick ? 1 : 3;
   for (const char* solver : {"dense", "accelerated"})
     for (long n : sizes) {
-      if (std::string(solver) == "dense" && n > 1000) continue;
+      if (std::string(solver) == "dense" && n > 500) continue;  // the dense solver's limit
       for (double f : {1.0, 0.1, 0.01}) {
         const Scene scene = make_scene(n, f, solver);
         Simulation sim(scene);
