@@ -10,8 +10,7 @@
 // solver dense (N <= 500) and accelerated (all N), PME far field. One step = evaluate at x0 (what
 // Simulation::run does) + advance; the first step (set-up) is not timed, then `steps` steps are
 // averaged.
-// Rows: solver (0 dense, 1 accelerated), N, fraction, N_I, threads; phases: seconds (per step),
-// iterations (Krylov iterations of the solve at x0, per step; 0 for the dense solver).
+// Rows: solver (0 dense, 1 accelerated), N, fraction, N_I, threads; phases: seconds (per step).
 // The plot script fits exponents per solver and fraction and the speed-up from the constraint
 // (time at fraction 1 over time at fraction f, same N).
 // Usage: bench_channel [--quick] [--out DIR]; full: N = 100 ... 10000 (dense to 500), 3 steps;
@@ -66,21 +65,18 @@ int main(int argc, char** argv) {
           sim.advance(s, ev);
         }
         const auto t0 = std::chrono::steady_clock::now();
-        double iterations = 0;  // Krylov iterations of the solve at x0, per step
         for (int k = 0; k < steps; ++k) {
           const Evaluation ev = sim.evaluate(s, s.position);
-          iterations += double(ev.hydro.iterations) / steps;
           sim.advance(s, ev);
         }
         const double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / steps;
         long ni = 0;
         for (char c : scene.fixed) ni += c == 0;
-        std::printf("%-11s N %5ld  interior fraction %.2f (N_I %5ld): %.4f s per step, %.1f Krylov iterations at x0\n",
-                    solver, n, f, ni, sec, iterations);
+        std::printf("%-11s N %5ld  interior fraction %.2f (N_I %5ld): %.4f s per step\n", solver, n, f, ni, sec);
         std::fflush(stdout);
         res.add({{"solver", std::string(solver) == "dense" ? 0.0 : 1.0}, {"N", double(n)}, {"fraction", f},
                  {"N_I", double(ni)}, {"threads", double(omp_get_max_threads())}},
-                {{"seconds", sec}, {"iterations", iterations}});
+                {{"seconds", sec}});
       }
     }
   std::printf("wrote %s\n", res.write(opt.out).c_str());

@@ -2,9 +2,8 @@
 """Chart the constrained-SD cost benchmark (bench/bench_channel.cpp, issue 17; Lee et al. 2024
 fig. 6): (a) wall time per Brownian SD step against N for the dense and the accelerated solver at
 interior fractions 1, 0.1, 0.01, with the exponent of a least-squares fit of log t against log N;
-(b) the speed-up from the constraint, t(fraction 1) / t(fraction f) at the same N; (c) the
-accelerated solver's Krylov iterations per solve (files that record them). Prints the table of
-docs/channels.md.
+(b) the speed-up from the constraint, t(fraction 1) / t(fraction f) at the same N. Prints the table
+of docs/channels.md.
 
 usage: plot_channel.py [RESULTS.json] [OUT.png]   (default bench/results/channel.json)
 """
@@ -22,7 +21,7 @@ rows = json.load(open(src))["rows"]
 names = {0: "dense SD", 1: "accelerated SD"}
 fracs = sorted({r["params"]["fraction"] for r in rows}, reverse=True)
 
-fig, ax = plt.subplots(1, 3, figsize=(17, 4.8))
+fig, ax = plt.subplots(1, 2, figsize=(12, 4.8))
 table = {}
 for s, marker, ls in ((0, "s", "--"), (1, "o", "-")):
     for k, f in enumerate(fracs):
@@ -61,19 +60,6 @@ ax[1].set_ylabel("t(N_I/N = 1) / t(N_I/N)")
 ax[1].set_title("(b) speed-up from the constraint")
 ax[1].legend(fontsize=8)
 ax[1].grid(alpha=0.3, which="both")
-for k, f in enumerate(fracs):
-    pts = sorted([r for r in rows if r["params"]["solver"] == 1 and r["params"]["fraction"] == f
-                  and "iterations" in r["phases"]], key=lambda r: r["params"]["N"])
-    if pts:
-        ax[2].semilogx([r["params"]["N"] for r in pts], [r["phases"]["iterations"] for r in pts], "o-",
-                       color=f"C{k}", label=f"accelerated SD, N_I/N = {f:g}")
-        print(f"accelerated SD, N_I/N = {f:g}: Krylov iterations per solve " +
-              ", ".join(f"{int(r['params']['N'])}: {r['phases']['iterations']:.1f}" for r in pts))
-ax[2].set_xlabel("N")
-ax[2].set_ylabel("Krylov iterations of the solve at x0")
-ax[2].set_title("(c) iterations (held rows: first-kind far-field equations)")
-ax[2].legend(fontsize=8)
-ax[2].grid(alpha=0.3, which="both")
 fig.tight_layout()
 fig.savefig(out, dpi=110)
 print("wrote", out)
