@@ -247,8 +247,8 @@ class ChannelOutputs final : public Observer {
         continue;
       }
       wall += F;
-      if (const long b = branches_.of_wall_particle(o_, x); b >= 0) branch_drop[std::size_t(b)] -= F2.dot(br[std::size_t(b)].direction);
       const std::size_t e = o_.nearest_wall(x);
+      if (const long b = branches_.of_wall_particle(o_, x, e); b >= 0) branch_drop[std::size_t(b)] -= F2.dot(br[std::size_t(b)].direction);
       const std::size_t w = std::size_t(std::find(wall_edge_.begin(), wall_edge_.end(), e) - wall_edge_.begin());
       const Vec2 t = (o_.b(e) - o_.a(e)).normalized();
       const double along = std::clamp((x - o_.a(e)).dot(t) / o_.length(e), 0.0, 1.0 - 1e-12);

@@ -351,6 +351,15 @@ namespace {
 
 // Writes the duct flow f sampled on a grid of spacing h over [-1, 1] x [-H/2, H/2] x [-W/2, W/2]
 // (x, y, z, u, v, w per line, a header line of names, comma separated), nodes in a shuffled order.
+// The 4 x 6 rectangular duct of the tabulated-flow tests.
+ChannelParams duct_4x6() {
+  ChannelParams c;
+  c.kind = ChannelParams::Kind::duct;
+  c.height = 4.0;
+  c.width = 6.0;
+  return c;
+}
+
 std::string write_duct_table(const ChannelFlow& f, double H, double W, double h, const std::string& name) {
   const std::string path = scratch(name);
   std::ofstream o(path);
@@ -369,11 +378,7 @@ std::string write_duct_table(const ChannelFlow& f, double H, double W, double h,
 }  // namespace
 
 TEST_CASE("tabulated flow from a fluid solver's grid: second-order interpolation of u and grad u") {
-  ChannelParams c;
-  c.kind = ChannelParams::Kind::duct;
-  c.height = 4.0;
-  c.width = 6.0;
-  const ChannelFlow exact(c, Domain{}, 1.0);
+  const ChannelFlow exact(duct_4x6(), Domain{}, 1.0);
   double err_u[2] = {0, 0}, err_g[2] = {0, 0};
   const double spacing[2] = {0.25, 0.125};
   for (int r = 0; r < 2; ++r) {
@@ -433,11 +438,7 @@ TEST_CASE("tabulated flow from a fluid solver's grid: second-order interpolation
 TEST_CASE("tabulated flow from a legacy VTK file: the same grid as the plain table, ASCII and binary") {
   // Reference: the duct's closed form written as the plain table (read above) and as VTK files of
   // the same nodes, written here byte by byte from the VTK format's definition (big-endian binary).
-  ChannelParams c;
-  c.kind = ChannelParams::Kind::duct;
-  c.height = 4.0;
-  c.width = 6.0;
-  const ChannelFlow exact(c, Domain{}, 1.0);
+  const ChannelFlow exact(duct_4x6(), Domain{}, 1.0);
   const FlowGrid ref = io::read_flow_table(write_duct_table(exact, 4.0, 6.0, 0.25, "duct_vtk.csv"));
   const std::size_t n = ref.u.size();
   auto big_endian = [](std::ofstream& o, const void* p, std::size_t size) {

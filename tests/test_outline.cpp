@@ -50,6 +50,19 @@ ChannelParams contraction() {
   return outline({{0, -20}, {60, -20}, {60, -5}, {120, -5}, {120, 5}, {60, 5}, {60, 20}, {0, 20}}, {3, 7}, 7);
 }
 
+// [L24]'s T-junction as a scene: main channel [0, 100] x [0, 20] (inlet edge 7, outlet 5), side
+// branch [50, 70] x [-40, 0] (outlet edge 2), pressure-driven flow.
+const std::string kLeeTee = R"(
+[walls]
+kind = "outline"
+outline = [[0, 0], [50, 0], [50, -40], [70, -40], [70, 0], [100, 0], [100, 20], [0, 20]]
+openings = [2, 5, 7]
+inlet = 7
+[flow]
+kind = "poiseuille"
+mean_velocity = 1.0
+)";
+
 Vec3 node_u(const FlowGrid& g, std::size_t i, std::size_t j) { return g.u[g.index(i, j, 0)]; }
 
 }  // namespace
@@ -157,16 +170,7 @@ TEST_CASE("outline walls: outside the fluid, no overlaps, every wall edge covere
 }
 
 TEST_CASE("outline scenes: monolayer fill, resolved round trip, errors name the key") {
-  const std::string base = R"(
-[walls]
-kind = "outline"
-outline = [[0, 0], [50, 0], [50, -40], [70, -40], [70, 0], [100, 0], [100, 20], [0, 20]]
-openings = [2, 5, 7]
-inlet = 7
-[flow]
-kind = "poiseuille"
-mean_velocity = 1.0
-)";
+  const std::string base = kLeeTee;
   const Scene s = io::parse_scene(base + "[particles]\ngenerate = \"random\"\ncount = 50\nseed = 4\n", "tj.toml");
   REQUIRE(s.interior_count() == 50);
   const Outline o = make_outline(s.walls);
@@ -331,16 +335,7 @@ TEST_CASE("outline branch outputs: pressure drop and areal fraction per channel"
   // with one channel the branch's drop is pressure_drop_particles (the same holding forces along
   // the inlet); an obstacle held in one channel raises that channel's drop far above the other's;
   // areal fractions from the placed spheres and the owned areas (2000 and 800 a^2).
-  const std::string tj = R"(
-[walls]
-kind = "outline"
-outline = [[0, 0], [50, 0], [50, -40], [70, -40], [70, 0], [100, 0], [100, 20], [0, 20]]
-openings = [2, 5, 7]
-inlet = 7
-[flow]
-kind = "poiseuille"
-mean_velocity = 1.0
-[hydrodynamics]
+  const std::string tj = kLeeTee + R"([hydrodynamics]
 model = "far_field"
 moments = "FT"
 tolerance = 1e-6

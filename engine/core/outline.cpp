@@ -159,8 +159,7 @@ long OutlineBranches::of_point(const Vec2& p, bool on_wall) const {
   return -1;
 }
 
-long OutlineBranches::of_wall_particle(const Outline& o, const Vec2& p) const {
-  const std::size_t k = o.nearest_wall(p);
+long OutlineBranches::of_wall_particle(const Outline& o, const Vec2& p, std::size_t k) const {
   const Vec2 A = o.a(k), D = o.b(k) - A;
   const double t = std::clamp((p - A).dot(D) / D.squaredNorm(), 0.0, 1.0);
   return of_point(A + t * D, true);

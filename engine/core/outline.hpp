@@ -90,8 +90,9 @@ struct OutlineBranches {
   double eps = 0;  // strip widening for points on a wall
   // The branch owning point p (-1: none); `on_wall` widens the strips by eps.
   long of_point(const Vec2& p, bool on_wall = false) const;
-  // The branch of a wall particle at p (its foot on the nearest wall edge of o).
-  long of_wall_particle(const Outline& o, const Vec2& p) const;
+  // The branch of a wall particle at p: its foot on wall edge k of o (its nearest, o.nearest_wall(p)).
+  long of_wall_particle(const Outline& o, const Vec2& p, std::size_t k) const;
+  long of_wall_particle(const Outline& o, const Vec2& p) const { return of_wall_particle(o, p, o.nearest_wall(p)); }
 };
 // Groups the openings into branches and measures the area each owns (cell-centre sampling on a grid
 // of spacing h = (narrowest opening) / 200 anchored at the lowest vertex: exact when the vertices
