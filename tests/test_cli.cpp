@@ -286,6 +286,14 @@ TEST_CASE("stiffness criterion on two Morse spheres: attraction presses the pair
   CHECK(r.status == 0);
   CHECK(contains(r.out, "WARNING: dt = 0.1 exceeds"));
   CHECK(number_after(r.out, "use dt < ") == doctest::Approx(2.0 / (k * m)).epsilon(1e-3));
+  CHECK(contains(r.out, "pair: morse, depth 5 kT, kappa"));  // athermal: no second unit
+
+  // With fluid.kT = 0.5 the depth is also given in the scene's own thermal energy: 5 / 0.5 = 10.
+  const Result hot = cli("check " + write_scene("morse_hot.toml", "[fluid]\nkT = 0.5\n[brownian]\nseed = 3\n" +
+                                                                      two_spheres(3.0, 0.0, "kind = \"morse\"\ndepth = 5.0\nkappa = 4.0", 0.01))
+                                        .string());
+  CHECK(contains(hot.out, "pair: morse, depth 5 kT (10 x fluid.kT), kappa"));
+  CHECK(contains(hot.out, "Brownian: fluid.kT = 0.5 (in the reference kT)"));
 }
 
 TEST_CASE("displacement criterion: a closing pair may close a tenth of its gap per step") {

@@ -392,19 +392,26 @@ int check(Simulation& sim, const CheckOptions& opt, std::FILE* out) {
     else
       std::fprintf(out, "  external torque: per particle, largest |T| = %.4g kT\n", largest(s.forces.external_torque));
   }
+  // Energies print in the reference unit kT of docs/units.md; a scene whose fluid.kT is another
+  // multiple of it also sees them in its own thermal energy.
+  auto thermal = [&](double e) {
+    char b[64] = "";
+    if (s.fluid.kT > 0 && s.fluid.kT != 1.0) std::snprintf(b, sizeof b, " (%.4g x fluid.kT)", e / s.fluid.kT);
+    return std::string(b);
+  };
   for (const auto& p : s.forces.pair) {
     const double hc = forces::resolved_cutoff(p, *amax);
     const char* how = p.cutoff > 0 ? "" : " (default)";
     switch (p.kind) {
       case PairForceParams::Kind::morse:
-        std::fprintf(out, "  pair: morse, depth %.4g kT, kappa %.4g /a, cut-off gap %.4g a%s\n", p.morse_depth,
-                     p.morse_kappa, hc, how);
+        std::fprintf(out, "  pair: morse, depth %.4g kT%s, kappa %.4g /a, cut-off gap %.4g a%s\n", p.morse_depth,
+                     thermal(p.morse_depth).c_str(), p.morse_kappa, hc, how);
         break;
       case PairForceParams::Kind::dlvo:
         std::fprintf(out,
-                     "  pair: dlvo (%s), Hamaker %.4g kT, kappa %.4g /a, surface potential %.4g kT/a, Born sigma %.4g a, "
+                     "  pair: dlvo (%s), Hamaker %.4g kT%s, kappa %.4g /a, surface potential %.4g kT/a, Born sigma %.4g a, "
                      "min gap %.3g a, cut-off gap %.4g a%s\n",
-                     name_of(p.double_layer), p.hamaker, p.debye_kappa, p.surface_potential, p.born_sigma, p.min_gap,
+                     name_of(p.double_layer), p.hamaker, thermal(p.hamaker).c_str(), p.debye_kappa, p.surface_potential, p.born_sigma, p.min_gap,
                      hc, how);
         break;
       case PairForceParams::Kind::hertz:
@@ -421,7 +428,7 @@ int check(Simulation& sim, const CheckOptions& opt, std::FILE* out) {
     }
   }
   if (s.forces.pair.empty()) std::fprintf(out, "  pair: none\n");
-  if (s.fluid.kT > 0) std::fprintf(out, "  Brownian: kT = %.4g, seed %llu\n", s.fluid.kT, (unsigned long long)s.seed);
+  if (s.fluid.kT > 0) std::fprintf(out, "  Brownian: fluid.kT = %.4g (in the reference kT), seed %llu\n", s.fluid.kT, (unsigned long long)s.seed);
   else std::fprintf(out, "  Brownian: none (kT = 0)\n");
   if (s.flow.kind != FlowParams::Kind::none) {
     char pe[96] = "";
