@@ -65,6 +65,15 @@ mean_velocity = 1.0
 
 Vec3 node_u(const FlowGrid& g, std::size_t i, std::size_t j) { return g.u[g.index(i, j, 0)]; }
 
+// The sanitizer job (-O0 with AddressSanitizer, docs/reliability.md) skips the three cases that take
+// minutes there (a fine flow grid, the branches' area sampling, constrained T-junction solves:
+// 116 s, 127 s and more than 290 s, 2026-11-29); the release suite runs them.
+#if defined(__SANITIZE_ADDRESS__)
+constexpr bool kSanitized = true;
+#else
+constexpr bool kSanitized = false;
+#endif
+
 }  // namespace
 
 TEST_CASE("outline flow: a straight outline carries plane Poiseuille flow and its pressure drop") {
@@ -110,7 +119,7 @@ TEST_CASE("outline flow: equal outlet pressures split a T by its arms' resistanc
   CHECK(ratio == doctest::Approx(2.0).epsilon(0.02));
 }
 
-TEST_CASE("outline flow: mass is conserved through a 4:1 contraction") {
+TEST_CASE("outline flow: mass is conserved through a 4:1 contraction" * doctest::skip(kSanitized)) {
   // Flux of the nodal velocities (trapezoid) across x = const. Where the flow is fully developed
   // (width w) the central-difference velocities lose (h^2/6)|u''| and the trapezoid (h^2/12)|u'|
   // jump: together 3 (h/w)^2 Q, both second order.
@@ -280,7 +289,7 @@ steps = 10
   CHECK(moved > 1e-3);  // the Brownian steps did move the spheres, in the plane
 }
 
-TEST_CASE("outline branches: openings grouped into channels, owned areas, wall particles") {
+TEST_CASE("outline branches: openings grouped into channels, owned areas, wall particles" * doctest::skip(kSanitized)) {
   // [L24]'s T: main channel [0, 100] x [0, 20] (inlet edge 7, outlet edge 5), side branch
   // [50, 70] x [-40, 0] (outlet edge 2). Owned areas by elementary geometry: main 100 x 20 (the
   // crossing included), side 20 x 40.
@@ -330,7 +339,7 @@ TEST_CASE("outline branches: openings grouped into channels, owned areas, wall p
   CHECK(cb.branch[0].width == doctest::Approx(40.0));
 }
 
-TEST_CASE("outline branch outputs: pressure drop and areal fraction per channel") {
+TEST_CASE("outline branch outputs: pressure drop and areal fraction per channel" * doctest::skip(kSanitized)) {
   // Far-field constrained solves of the first frame. References: an empty channel holds no force;
   // with one channel the branch's drop is pressure_drop_particles (the same holding forces along
   // the inlet); an obstacle held in one channel raises that channel's drop far above the other's;
