@@ -26,7 +26,7 @@ int main(int argc, char** argv) {
   const bench::Options opt = bench::parse_options(argc, argv);
   const bool quick = opt.quick;
   const std::string out = opt.out;
-  const std::vector<long> sizes = quick ? std::vector<long>{400, 800} : std::vector<long>{500, 1000, 2000, 4000};
+  const std::vector<long> sizes = quick ? std::vector<long>{200, 400} : std::vector<long>{500, 1000, 2000, 4000};
   const std::vector<double> phis = quick ? std::vector<double>{0.1, 0.5} : std::vector<double>{0.1, 0.2, 0.3, 0.4, 0.5};
   bench::Results res(quick ? "near_field_quick" : "near_field");
   for (Moments m : {Moments::FT, Moments::FTS}) {
