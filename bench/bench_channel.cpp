@@ -14,7 +14,7 @@
 // The plot script fits exponents per solver and fraction and the speed-up from the constraint
 // (time at fraction 1 over time at fraction f, same N).
 // Usage: bench_channel [--quick] [--out DIR]; full: N = 100 ... 10000 (dense to 500), 3 steps;
-// --quick: N = 100, 300, 1 step.
+// --quick: N = 60, 150, 1 step.
 #include "bench/harness.hpp"
 #include "engine/simulation.hpp"
 #include "io/scene_toml.hpp"
@@ -51,7 +51,7 @@ Scene make_scene(long n, double fraction, const std::string& solver) {
 int main(int argc, char** argv) {
   const bench::Options opt = bench::parse_options(argc, argv);
   bench::Results res(opt.quick ? "channel_quick" : "channel");
-  const std::vector<long> sizes = opt.quick ? std::vector<long>{100, 300} : std::vector<long>{100, 300, 1000, 3000, 10000};
+  const std::vector<long> sizes = opt.quick ? std::vector<long>{60, 150} : std::vector<long>{100, 300, 1000, 3000, 10000};
   const int steps = opt.quick ? 1 : 3;
   for (const char* solver : {"dense", "accelerated"})
     for (long n : sizes) {
