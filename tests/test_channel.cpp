@@ -349,8 +349,6 @@ TEST_CASE("sphere beside walls of wall particles: mobility against the flat-wall
 
 namespace {
 
-// Writes the duct flow f sampled on a grid of spacing h over [-1, 1] x [-H/2, H/2] x [-W/2, W/2]
-// (x, y, z, u, v, w per line, a header line of names, comma separated), nodes in a shuffled order.
 // The 4 x 6 rectangular duct of the tabulated-flow tests.
 ChannelParams duct_4x6() {
   ChannelParams c;
@@ -359,6 +357,9 @@ ChannelParams duct_4x6() {
   c.width = 6.0;
   return c;
 }
+
+// Writes the duct flow f sampled on a grid of spacing h over [-1, 1] x [-H/2, H/2] x [-W/2, W/2]
+// (x, y, z, u, v, w per line, a header line of names, comma separated), nodes in a shuffled order.
 
 std::string write_duct_table(const ChannelFlow& f, double H, double W, double h, const std::string& name) {
   const std::string path = scratch(name);

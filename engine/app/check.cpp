@@ -411,8 +411,8 @@ int check(Simulation& sim, const CheckOptions& opt, std::FILE* out) {
         std::fprintf(out,
                      "  pair: dlvo (%s), Hamaker %.4g kT%s, kappa %.4g /a, surface potential %.4g kT/a, Born sigma %.4g a, "
                      "min gap %.3g a, cut-off gap %.4g a%s\n",
-                     name_of(p.double_layer), p.hamaker, thermal(p.hamaker).c_str(), p.debye_kappa, p.surface_potential, p.born_sigma, p.min_gap,
-                     hc, how);
+                     name_of(p.double_layer), p.hamaker, thermal(p.hamaker).c_str(), p.debye_kappa, p.surface_potential,
+                     p.born_sigma, p.min_gap, hc, how);
         break;
       case PairForceParams::Kind::hertz:
         std::fprintf(out, "  pair: hertz, stiffness k_H %.4g kT/a^2.5 (contact only)\n", p.hertz_stiffness);
@@ -428,7 +428,8 @@ int check(Simulation& sim, const CheckOptions& opt, std::FILE* out) {
     }
   }
   if (s.forces.pair.empty()) std::fprintf(out, "  pair: none\n");
-  if (s.fluid.kT > 0) std::fprintf(out, "  Brownian: fluid.kT = %.4g (in the reference kT), seed %llu\n", s.fluid.kT, (unsigned long long)s.seed);
+  if (s.fluid.kT > 0)
+    std::fprintf(out, "  Brownian: fluid.kT = %.4g (in the reference kT), seed %llu\n", s.fluid.kT, (unsigned long long)s.seed);
   else std::fprintf(out, "  Brownian: none (kT = 0)\n");
   if (s.flow.kind != FlowParams::Kind::none) {
     char pe[96] = "";
