@@ -142,6 +142,7 @@ mean_velocity = 4.0
 [hydrodynamics]
 model = "stokesian"
 tolerance = 1e-3
+lubrication_min_gap = 1e-2   # as the fouling configs: lets the contact force hold a sphere at a wall
 [brownian]
 seed = 5
 [time]
