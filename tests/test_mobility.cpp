@@ -61,6 +61,15 @@ Config random_config(int n, double L, double amin, double amax, std::uint64_t se
   }
   return c;
 }
+// The sanitizer job (-O0 with AddressSanitizer, docs/reliability.md) checks the large cases of the
+// vectorised twin test against the reference product only (the dense matrix and the reference-kernel
+// pass over 300 spheres took 150 s there, 2026-11-29); the release suite runs all of it.
+#if defined(__SANITIZE_ADDRESS__)
+constexpr bool kSanitized = true;
+#else
+constexpr bool kSanitized = false;
+#endif
+
 }  // namespace
 
 TEST_CASE("single sphere: Stokes drag, rotation and stresslet mobilities") {
@@ -262,9 +271,13 @@ TEST_CASE("vectorised direct product equals its reference twin (every path, thre
       for (auto& e : v) e = g(rng);
       VecX ref;
       mobility_product_reference(c.x, c.a, 0.7, m, v, ref);
-      const VecX dense = dense_mobility(c.x, c.a, 0.7, m) * v;
-      CHECK((ref - dense).norm() <= 1e-13 * dense.norm());
+      const bool large = c.x.size() > 100;
+      if (!(kSanitized && large)) {
+        const VecX dense = dense_mobility(c.x, c.a, 0.7, m) * v;
+        CHECK((ref - dense).norm() <= 1e-13 * dense.norm());
+      }
       for (DirectKernels k : {DirectKernels::automatic, DirectKernels::baseline, DirectKernels::reference}) {
+        if (kSanitized && large && k == DirectKernels::reference) continue;
         CAPTURE(int(k));
         force_direct_kernels(k);
         VecX y1, y2;
