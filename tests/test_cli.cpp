@@ -296,6 +296,40 @@ TEST_CASE("stiffness criterion on two Morse spheres: attraction presses the pair
   CHECK(contains(hot.out, "Brownian: fluid.kT = 0.5 (in the reference kT)"));
 }
 
+TEST_CASE("check: wall contact in a channel flow, and the warning at the default lubrication floor") {
+  // A slit 10 a high with plane Poiseuille flow (mean 1, centreline 1.5): fixed wall particles see
+  // no flow, so check reports the speed U_c at which a touching sphere is carried against one and
+  // the contact force 6 pi mu a_eff^2 U_c / h_f that stops it (unit radii: a_eff = 1/2, h_f = the
+  // floor); docs/channels.md, "Contact with wall particles".
+  auto scene = [](const char* floor_line) {
+    return std::string("[domain]\nkind = \"periodic\"\nbox = [16.4, 14.05, 16.4]\n[walls]\nkind = \"slit\"\n"
+                       "height = 10.0\nradius = 1.0\ngap = 0.05\n[particles]\ngenerate = \"random\"\ncount = 8\n"
+                       "seed = 2\n[flow]\nkind = \"poiseuille\"\nmean_velocity = 1.0\n[hydrodynamics]\n"
+                       "model = \"stokesian\"\ntolerance = 1e-3\n") +
+           floor_line + "[time]\ndt = 0.001\nsteps = 2\n";
+  };
+  const Result def = cli("check --no-estimate " + write_scene("slit_floor_default.toml", scene("")).string());
+  CHECK(def.status == 0);
+  const double u_c = number_after(def.out, "carried against it at up to ");
+  CHECK(u_c > 0.0);
+  CHECK(u_c < 1.5);  // below the centreline speed
+  const double f = number_after(def.out, "stopping it takes a contact force of about ");
+  CHECK(f == doctest::Approx(6 * kPiTest * 0.25 * u_c / 1e-6).epsilon(1e-3));
+  CHECK(contains(def.out, "WARNING: with [hydrodynamics] lubrication_min_gap = 1e-06"));
+  CHECK(number_after(def.out, "where the force is about ") == doctest::Approx(6 * kPiTest * 0.25 * u_c / 1e-2).epsilon(1e-3));
+
+  const Result held = cli("check --no-estimate " +
+                          write_scene("slit_floor_1e2.toml", scene("lubrication_min_gap = 1e-2\n")).string());
+  CHECK(held.status == 0);
+  CHECK(number_after(held.out, "carried against it at up to ") == doctest::Approx(u_c).epsilon(1e-3));
+  CHECK_FALSE(contains(held.out, "WARNING: with [hydrodynamics] lubrication_min_gap"));
+
+  // Far field only (no lubrication): nothing to report.
+  std::string ff = scene("");
+  ff.replace(ff.find("model = \"stokesian\""), 20, "model = \"far_field\"");
+  CHECK_FALSE(contains(cli("check --no-estimate " + write_scene("slit_ff.toml", ff).string()).out, "wall contact"));
+}
+
 TEST_CASE("displacement criterion: a closing pair may close a tenth of its gap per step") {
   // Free draining: each sphere moves at f/(6 pi mu a); the pair closes at 2 f/(6 pi), gap 0.5.
   const double f = 1.0, gap = 0.5;

@@ -89,6 +89,49 @@ double relative_mobility(const Scene& scene, const ResolvedModel& model, double 
   return 1.0 / (1.0 / m_far + 6 * kPi * mu * a_eff * a_eff / std::max(h, h_floor));
 }
 
+// Wall contact (docs/channels.md, "Contact with wall particles"). Fixed particles see no ambient
+// flow, so a sphere touching one is carried against it at the fluid's speed there, U_c, whatever
+// the gap; with exact lubrication the approach resistance is capped at the floor h_f, so stopping
+// the sphere takes a contact force of about F = 6 pi mu a_eff^2 U_c / h_f (a_eff = a a_w/(a + a_w),
+// h_f = lubrication_min_gap (a + a_w)/2). U_c: the largest ambient speed at the six points one
+// contact distance from each fixed particle along +-x, +-y, +-z (channel flows are zero outside the
+// fluid, so only the points on the fluid side count).
+struct WallContact {
+  bool applies = false;
+  double speed = 0.0;  // U_c [a/time]
+  double force = 0.0;  // F [kT/a] at the scene's floor
+  double force_at_1e2 = 0.0;  // F with lubrication_min_gap = 1e-2 (the fouling configs)
+};
+
+WallContact wall_contact(const Scene& scene, const ResolvedModel& model) {
+  WallContact w;
+  if (model.level != HydroModel::stokesian || scene.hydro.lubrication != Lubrication::exact ||
+      scene.flow.kind == FlowParams::Kind::none)
+    return w;
+  double a_in = 0.0, a_w = 0.0;
+  std::vector<Vec3> pts;
+  for (std::size_t i = 0; i < scene.positions.size(); ++i)
+    if (!scene.fixed[i]) a_in = std::max(a_in, scene.radii[i]);
+  for (std::size_t i = 0; i < scene.positions.size(); ++i) {
+    if (!scene.fixed[i]) continue;
+    a_w = std::max(a_w, scene.radii[i]);
+    for (int d = 0; d < 3; ++d)
+      for (double sgn : {-1.0, 1.0}) pts.push_back(scene.positions[i] + sgn * (scene.radii[i] + a_in) * Vec3::Unit(d));
+  }
+  if (pts.empty() || a_in <= 0.0) return w;
+  const auto field = make_ambient_field(scene.flow, scene.walls, scene.domain);
+  FlowSample fs;
+  field->sample(pts, fs);
+  for (const Vec3& u : fs.u) w.speed = std::max(w.speed, u.norm());
+  if (w.speed <= 0.0) return w;
+  w.applies = true;
+  const double a_eff = a_in * a_w / (a_in + a_w);
+  const double drag = 6 * kPi * scene.fluid.viscosity * a_eff * a_eff * w.speed;
+  w.force = drag / (scene.hydro.lubrication_min_gap * (a_in + a_w) / 2);
+  w.force_at_1e2 = drag / (1e-2 * (a_in + a_w) / 2);
+  return w;
+}
+
 std::string vec(const Vec3& v) {
   char b[96];
   std::snprintf(b, sizeof b, "(%.6g, %.6g, %.6g)", v.x(), v.y(), v.z());
@@ -458,6 +501,21 @@ int check(Simulation& sim, const CheckOptions& opt, std::FILE* out) {
     } else {
       std::fprintf(out, "  ambient flow: %s, rate %.4g /time%s\n", name_of(s.flow.kind), s.flow.rate, pe);
     }
+  }
+
+  const WallContact wc = wall_contact(s, model);
+  if (wc.applies) {
+    std::fprintf(out,
+                 "  wall contact: fixed particles see no ambient flow; a sphere touching one is carried against it at up to "
+                 "%.4g a/time, and stopping it takes a contact force of about %.4g kT/a (lubrication_min_gap = %.3g; "
+                 "docs/channels.md, \"Contact with wall particles\")\n",
+                 wc.speed, wc.force, s.hydro.lubrication_min_gap);
+    if (s.hydro.lubrication_min_gap < 1e-3)
+      std::fprintf(out,
+                   "  WARNING: with [hydrodynamics] lubrication_min_gap = %.3g a sphere that reaches a fixed particle can "
+                   "be driven into it (the run stops at [run] max_overlap); the channel configs set 1e-2, where the "
+                   "force is about %.4g kT/a\n",
+                   s.hydro.lubrication_min_gap, wc.force_at_1e2);
   }
 
   // Outputs.
