@@ -4,6 +4,7 @@
 
 #include "engine/kernels/far_field.hpp"
 #include "engine/kernels/mobility_pair.hpp"
+#include "support/sanitizer.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <cmath>
@@ -12,6 +13,7 @@
 #include <string>
 
 using namespace stokesian;
+using stokesian::test::kSanitized;
 using mobility::pair_scalars;
 using mobility::PairScalars;
 
@@ -61,15 +63,6 @@ Config random_config(int n, double L, double amin, double amax, std::uint64_t se
   }
   return c;
 }
-// The sanitizer job (-O0 with AddressSanitizer, docs/reliability.md) checks the large cases of the
-// vectorised twin test against the reference product only (the dense matrix and the reference-kernel
-// pass over 300 spheres took 150 s there, 2026-11-29); the release suite runs all of it.
-#if defined(__SANITIZE_ADDRESS__)
-constexpr bool kSanitized = true;
-#else
-constexpr bool kSanitized = false;
-#endif
-
 }  // namespace
 
 TEST_CASE("single sphere: Stokes drag, rotation and stresslet mobilities") {
@@ -271,6 +264,8 @@ TEST_CASE("vectorised direct product equals its reference twin (every path, thre
       for (auto& e : v) e = g(rng);
       VecX ref;
       mobility_product_reference(c.x, c.a, 0.7, m, v, ref);
+      // The sanitizer job checks the large cases against the reference product only (the dense
+      // matrix and the reference-kernel pass over 300 spheres took 150 s at -O0, 2026-11-29).
       const bool large = c.x.size() > 100;
       if (!(kSanitized && large)) {
         const VecX dense = dense_mobility(c.x, c.a, 0.7, m) * v;

@@ -17,6 +17,7 @@
 #include "engine/model.hpp"
 #include "engine/simulation.hpp"
 #include "io/scene_toml.hpp"
+#include "support/sanitizer.hpp"
 #include "trees/walls.hpp"
 
 #include <cmath>
@@ -65,14 +66,10 @@ mean_velocity = 1.0
 
 Vec3 node_u(const FlowGrid& g, std::size_t i, std::size_t j) { return g.u[g.index(i, j, 0)]; }
 
-// The sanitizer job (-O0 with AddressSanitizer, docs/reliability.md) skips the three cases that take
-// minutes there (a fine flow grid, the branches' area sampling, constrained T-junction solves:
-// 116 s, 127 s and more than 290 s, 2026-11-29); the release suite runs them.
-#if defined(__SANITIZE_ADDRESS__)
-constexpr bool kSanitized = true;
-#else
-constexpr bool kSanitized = false;
-#endif
+// The sanitizer job (tests/support/sanitizer.hpp) skips the three cases that take minutes there (a fine flow
+// grid, the branches' area sampling, constrained T-junction solves: 116 s, 127 s and more than
+// 290 s at -O0, 2026-11-29); the release suite runs them.
+using stokesian::test::kSanitized;
 
 }  // namespace
 

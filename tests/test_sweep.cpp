@@ -4,6 +4,7 @@
 #include "io/scene_toml.hpp"
 #include "engine/simulation.hpp"
 #include "io/sweep.hpp"
+#include "support/sanitizer.hpp"
 
 #include <doctest/doctest.h>
 #include <toml++/toml.h>
@@ -220,11 +221,10 @@ TEST_CASE("example sweeps in configs/sweeps/ are valid and their runs start") {
   for (const auto& e : fs::directory_iterator(std::string(STOKESIAN_SOURCE_DIR) + "/configs/sweeps")) {
     if (e.path().extension() != ".toml") continue;
     CAPTURE(e.path().string());
-#if defined(__SANITIZE_ADDRESS__)
-    // The sanitizer job (-O0) skips the example sweeps of more than 200 spheres: expanding one
-    // resolves every run's scene, placing its spheres (hard_sphere_peclet: 20 placements of 500
-    // spheres at phi = 0.45, 117 s there). The release suite expands and steps them.
-    {
+    // The sanitizer job (tests/support/sanitizer.hpp) skips the example sweeps of more than 200 spheres:
+    // expanding one resolves every run's scene, placing its spheres (hard_sphere_peclet: 20
+    // placements of 500 spheres at phi = 0.45, 117 s at -O0). The release suite expands and steps them.
+    if (stokesian::test::kSanitized) {
       const toml::table t = toml::parse_file(e.path().string());
       const fs::path base = e.path().parent_path() / t["base"].value_or(std::string());
       if (io::load_scene(base.string()).fixed.size() > 200) {
@@ -232,7 +232,6 @@ TEST_CASE("example sweeps in configs/sweeps/ are valid and their runs start") {
         continue;
       }
     }
-#endif
     const io::Sweep sw = io::load_sweep(e.path().string());
     CHECK(sw.runs.size() >= 2);
     for (const auto& r : sw.runs) CHECK(r.values.size() == sw.columns.size());
