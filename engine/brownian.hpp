@@ -26,13 +26,18 @@
 //    exact, linear in the pairs, and parallel.
 //  - far field, Lanczos rather than a positively split Ewald sampler (Fiore et al. 2017): it works
 //    with every far-field method (direct, Ewald, PME, sheared) through the operator alone.
-//    Measured (bench_brownian, phi = 0.4, sheared, FTS, tolerance 1e-3): 26 / 44 / 65 Lanczos
-//    iterations at N = 1e3 / 1e4 / 1e5 against 22 / 23 / 30 GMRES products per solve: the largest
-//    single part of a step at N >= 1e4; a preconditioned or split-Ewald sampler is the next step.
+//    Plain Lanczos took 26 / 44 / 65 iterations at N = 1e3 / 1e4 / 1e5 (bench_brownian, phi = 0.4,
+//    sheared, FTS, tolerance 1e-3), against 22 / 23 / 30 GMRES products per solve.
+//  - in periodic boxes the Lanczos run is preconditioned (Chow & Saad 2014, SIAM J. Sci. Comput.
+//    36, A588): for any invertible symmetric G, x = G (G M G)^{-1/2} psi has covariance
+//    G (G M G)^{-1} G = M^{-1} exactly, and G = LongWaveDeflation (below) removes the long-wave
+//    collective modes that set the top of M's spectrum.
 // Streams: psi from the caller's stream, then the pair vectors from a fork of it (RandomStream::fork).
+#include "engine/core/krylov.hpp"
 #include "engine/core/layout.hpp"
 #include "engine/core/operators.hpp"
 
+#include <array>
 #include <vector>
 
 namespace stokesian {
@@ -46,11 +51,41 @@ VecX self_resistance(const std::vector<double>& a, double mu, Moments m);
 
 struct LanczosReport {
   int iterations = 0;
+  long wave_vectors = 0;  // of the long-wave deflation (0: none)
 };
 
-// scale * (M^{-1/2} psi) with psi standard normal from rng (M.size() draws),
-// zero outside the flagged entries. Lanczos to relative change `tol`; PhysicsError when it fails.
-VecX far_field_brownian_force(const MobilityOperator& M, const std::vector<char>& given, double scale,
-                              double tol, Rng& rng, LanczosReport* report = nullptr);
+// Long-wave deflation G of the far-field mobility of a periodic box (brownian.cpp has the
+// mathematics). G is symmetric, fixed by the configuration, and the identity in open domains or when
+// no collective mode stands above the rest of the spectrum.
+class LongWaveDeflation {
+ public:
+  LongWaveDeflation(const Configuration& c, Moments m);
+  bool empty() const { return n_.empty(); }
+  std::size_t wave_vectors() const { return n_.size(); }
+  // out = G in (out is resized; in and out may not alias).
+  void apply(const VecX& in, VecX& out) const;
+
+  static constexpr double kMinRatio = 2.0;  // deflate modes whose estimated eigenvalue is >= this x the self mobility
+  static constexpr long kMaxWaveVectors = 128;  // at most this many wave vectors (4 modes each)
+
+ private:
+  int d_ = 3;
+  long np_ = 0;
+  int nmax_[3] = {0, 0, 0};
+  std::vector<std::array<int, 3>> n_;  // integer wave vectors, k = 2 pi A^{-T} n
+  std::vector<Mat3> w_;                // (c_k - 1) (2 / N) (I - k k^T / k^2) per wave vector
+  std::vector<double> s_;              // fractional coordinates, 3 per particle
+};
+
+// y = G (G M G)^{-1/2} psi, G = LongWaveDeflation(c) (the identity outside periodic boxes), by
+// Lanczos to relative change `tol` on G M G: for standard normal psi, covariance M^{-1}.
+KrylovResult far_field_inverse_sqrt(const MobilityOperator& M, const Configuration& c, const VecX& psi, VecX& y,
+                                    double tol, LanczosReport* report = nullptr);
+
+// scale * (M^{-1/2} psi) with psi standard normal from rng (M.size() draws), zero outside the
+// flagged entries. Lanczos to relative change `tol` on G M G with G = LongWaveDeflation(c) (the
+// identity outside periodic boxes); PhysicsError when it fails. c is M's configuration.
+VecX far_field_brownian_force(const MobilityOperator& M, const Configuration& c, const std::vector<char>& given,
+                              double scale, double tol, Rng& rng, LanczosReport* report = nullptr);
 
 }  // namespace stokesian

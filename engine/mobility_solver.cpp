@@ -25,6 +25,7 @@ MobilitySolver::MobilitySolver(std::unique_ptr<MobilityOperator> op, double tole
 void MobilitySolver::prepare(const Configuration& c) {
   op_->set_configuration(c);
   n_ = long(c.x.size());
+  config_.store(c);
 }
 
 HydroResult MobilitySolver::solve(const HydroProblem& p) {
@@ -93,8 +94,8 @@ std::vector<Vec3> MobilitySolver::brownian_displacement(double kT, double dt, Rn
 }
 
 VecX MobilitySolver::brownian_force(double kT, double dt, const std::vector<char>& fixed, Rng& rng) {
-  return far_field_brownian_force(*op_, force_given_flags(op_->moments(), n_, fixed), std::sqrt(2.0 * kT / dt), tol_,
-                                  rng);
+  return far_field_brownian_force(*op_, {config_.x, config_.a, config_.domain}, force_given_flags(op_->moments(), n_, fixed),
+                                  std::sqrt(2.0 * kT / dt), tol_, rng);
 }
 
 FreeDrainingSolver::FreeDrainingSolver(const MobilitySpec& spec)

@@ -41,6 +41,7 @@ class MobilitySolver : public HydroSolver {
   std::unique_ptr<MobilityOperator> op_;
   double tol_;
   long n_ = 0;  // particles of the prepared configuration
+  StoredConfiguration config_;  // the prepared configuration (the Brownian force's deflation)
 };
 
 // Free draining: M = the self blocks.

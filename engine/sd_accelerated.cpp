@@ -436,8 +436,9 @@ VecX AcceleratedStokesianDynamics::brownian_force(double kT, double dt, const st
   const double pref = std::sqrt(2.0 * kT / dt);
   auto t0 = std::chrono::steady_clock::now();
   LanczosReport lr;
-  VecX xi = far_field_brownian_force(*op_, given, pref, brownian_tol_, rng, &lr);
+  VecX xi = far_field_brownian_force(*op_, {config_.x, config_.a, config_.domain}, given, pref, brownian_tol_, rng, &lr);
   stats_.lanczos_iterations = lr.iterations;
+  stats_.deflated_wave_vectors = lr.wave_vectors;
   stats_.seconds_far_noise = seconds_since(t0);
   t0 = std::chrono::steady_clock::now();
   xi += pref * near_.brownian_force(config_.x, config_.a, config_.domain, given, rng.fork());

@@ -80,6 +80,7 @@ struct AcceleratedSdStats {
   double seconds_far_field_setup = 0.0, seconds_near_field_assembly = 0.0, seconds_factorisation = 0.0;
   double seconds_krylov = 0.0;  // last solve's Krylov iterations (products and triangular solves)
   int lanczos_iterations = 0;   // far-field products of the last Brownian force
+  long deflated_wave_vectors = 0;  // of its long-wave deflation (engine/brownian.hpp)
   int held_clusters = 0;        // blocks of the held-row preconditioner (0: none)
   double seconds_held_preconditioner = 0.0;  // assembling and factorising them
   double held_error_estimate = 0.0;  // last solve with held particles: its estimated relative error

@@ -4,7 +4,7 @@
 // conjugate_gradient: solves A x = b for symmetric positive definite A given as a product
 //   (Hestenes & Stiefel 1952), stopping when |r| <= tol |b|.
 // lanczos_power: y = A^p z (p = 1/2: lanczos_sqrt; p = -1/2: the Brownian force M^{-1/2} z) by
-//   the Lanczos approximation of Chow & Saad (2014, SIAM J. Sci. Comput. 36, A1092, alg. 2.1):
+//   the Lanczos approximation of Chow & Saad (2014, SIAM J. Sci. Comput. 36, A588):
 //   y_k = |z| V_k T_k^p e_1, stopped when successive iterates differ by less than tol relative.
 //   For p < 0 the iteration converges like CG on A (error ~ ((sqrt(k)-1)/(sqrt(k)+1))^m, k the
 //   condition number); a Ritz value <= 0 is reported as indefinite.
