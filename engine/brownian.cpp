@@ -20,7 +20,7 @@
 //
 // With lambda_s = mean of 1 / (6 pi mu a_i) and rho_k = lambda_k / lambda_s = n / (k^2 mean(1/(6 pi a)))
 // (independent of mu),
-// the wave vectors with rho_k >= kMinRatio (the kMaxWaveVectors largest; one of each pair +-k) get
+// the wave vectors with rho_k >= min_ratio (the max_wave_vectors largest; one of each pair +-k) get
 // c_k = rho_k^{-1/2} and, on the translational entries,
 //
 //     G_ij = delta_ij I + sum_k (c_k - 1) (2 / N) (I - k k^T / k^2) cos(k.(x_i - x_j)),
@@ -57,7 +57,7 @@ void phase_powers(double s, int nmax, Cplx* e) {
 }
 }  // namespace
 
-LongWaveDeflation::LongWaveDeflation(const Configuration& c, Moments m) {
+LongWaveDeflation::LongWaveDeflation(const Configuration& c, Moments m, double min_ratio, long max_wave_vectors) {
   d_ = dof_per_particle(m);
   np_ = long(c.x.size());
   if (!c.domain.periodic() || np_ == 0) return;
@@ -68,9 +68,9 @@ LongWaveDeflation::LongWaveDeflation(const Configuration& c, Moments m) {
   inv_a /= double(np_);
   const double density = double(np_) / std::abs(A.determinant());
   // rho(k) = density / (k^2 inv_a) >= kMinRatio  <=>  |k| <= kmax; |n_d| = |a_d . k| / (2 pi).
-  const double kmax = std::sqrt(density / (inv_a * kMinRatio));
+  const double kmax = std::sqrt(density / (inv_a * min_ratio));
   // At most 3N/16 wave vectors (4 modes each, against 3N translational entries).
-  const long cap = std::min<long>(kMaxWaveVectors, 3 * np_ / 16);
+  const long cap = std::min<long>(max_wave_vectors, 3 * np_ / 16);
   if (cap <= 0) return;
   int bound[3];
   for (int q = 0; q < 3; ++q) bound[q] = int(std::floor(kmax * A.col(q).norm() / (2.0 * kPi)));
@@ -86,7 +86,7 @@ LongWaveDeflation::LongWaveDeflation(const Configuration& c, Moments m) {
         if (n2 == 0 && (n1 < 0 || (n1 == 0 && n0 <= 0))) continue;
         const Vec3 k = B * Vec3(n0, n1, n2);
         const double rho = density / (k.squaredNorm() * inv_a);
-        if (rho >= kMinRatio) cand.push_back({rho, {n0, n1, n2}});
+        if (rho >= min_ratio) cand.push_back({rho, {n0, n1, n2}});
       }
   std::sort(cand.begin(), cand.end(), [](const Cand& p, const Cand& q) { return p.rho != q.rho ? p.rho > q.rho : p.n < q.n; });
   if (long(cand.size()) > cap) cand.resize(std::size_t(cap));

@@ -191,12 +191,30 @@ void AcceleratedStokesianDynamics::factorise_held(const std::vector<long>& v) {
       held_lu_[c].compute(P);
     }
   }
+  held_wave_.reset();
+  if (held_precondition_ && held_long_wave_ && !held.empty() && config_.domain.periodic()) {
+    auto w = std::make_unique<LongWaveDeflation>(Configuration{held_x, held_a, config_.domain}, m_,
+                                                 LongWaveDeflation::kMinRatio, kHeldWaveVectors);
+    if (!w->empty()) held_wave_ = std::move(w);
+  }
   stats_.held_clusters = int(held_lu_.size());
+  stats_.held_wave_vectors = held_wave_ ? long(held_wave_->wave_vectors()) : 0;
   stats_.seconds_held_preconditioner = seconds_since(t0);
 }
 
 // z <- P^-1 z: each cluster's entries solved with its block, the other entries unchanged.
 void AcceleratedStokesianDynamics::apply_held_inverse(VecX& z) const {
+  const int d = dof_per_particle(m_);
+  auto wave = [&] {
+    if (!held_wave_) return;
+    VecX h(long(held_ids_.size()) * d), gh;
+    for (std::size_t k = 0; k < held_ids_.size(); ++k)
+      for (int q = 0; q < d; ++q) h[long(k) * d + q] = z[held_ids_[k] * d + q];
+    held_wave_->apply(h, gh);
+    for (std::size_t k = 0; k < held_ids_.size(); ++k)
+      for (int q = 0; q < d; ++q) z[held_ids_[k] * d + q] = gh[long(k) * d + q];
+  };
+  wave();
   for (std::size_t c = 0; c < held_lu_.size(); ++c) {
     const std::vector<long>& e = held_entries_[c];
     VecX r(long(e.size()));
@@ -204,6 +222,7 @@ void AcceleratedStokesianDynamics::apply_held_inverse(VecX& z) const {
     r = held_lu_[c].solve(r);
     for (std::size_t k = 0; k < e.size(); ++k) z[e[k]] = r[long(k)];
   }
+  wave();
 }
 
 HydroResult AcceleratedStokesianDynamics::solve(const HydroProblem& p) {
