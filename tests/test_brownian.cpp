@@ -23,10 +23,10 @@
 #include "engine/sd_dense.hpp"
 #include "ewald/ewald_reference.hpp"
 #include "support/sanitizer.hpp"
+#include "support/threads.hpp"
 #include "trees/placement.hpp"
 
 #include <Eigen/Eigenvalues>
-#include <omp.h>
 
 #include <cmath>
 #include <string>
@@ -251,12 +251,14 @@ TEST_CASE("long-wave deflation of the far-field sampler: covariance M^-1 exactly
         CHECK((y - X * psi).norm() <= 10 * tol * y.norm());
         // Same G on one thread and on every thread (fixed blocks, summed in order).
         VecX g1, g2;
-        const int threads = omp_get_max_threads();
-        omp_set_num_threads(1);
-        G.apply(psi, g1);
-        omp_set_num_threads(std::max(2, threads));
-        G.apply(psi, g2);
-        omp_set_num_threads(threads);
+        {
+          const test::ThreadCount one(1);
+          G.apply(psi, g1);
+        }
+        {
+          const test::ThreadCount several(test::ThreadCount::kSeveral);
+          G.apply(psi, g2);
+        }
         CHECK((g1 - g2).norm() == 0.0);
       }
     }

@@ -7,6 +7,7 @@
 #include <doctest/doctest.h>
 
 #include "support/random.hpp"
+#include "support/threads.hpp"
 
 #include "engine/kernels/far_field.hpp"
 #include "engine/kernels/mobility_pair.hpp"
@@ -409,14 +410,16 @@ TEST_CASE("PME: deterministic for a given thread count and independent of it") {
   const Config c = random_config(60, L, 0.5, 1.5, 41);
   const VecX x = random_vector(60 * 11, 5);
   const ewald::PmeFarField pme(c.x, c.a, 1.0, Moments::FTS, box(L), 1e-6);
-  const int threads = omp_get_max_threads();
   VecX y1, y2, y3;
-  omp_set_num_threads(1);
-  pme.apply(x, y1);
-  omp_set_num_threads(2);
-  pme.apply(x, y2);
-  pme.apply(x, y3);
-  omp_set_num_threads(threads);
+  {
+    const test::ThreadCount one(1);
+    pme.apply(x, y1);
+  }
+  {
+    const test::ThreadCount two(2);
+    pme.apply(x, y2);
+    pme.apply(x, y3);
+  }
   CHECK((y1 - y2).norm() == 0.0);
   CHECK((y2 - y3).norm() == 0.0);
 }

@@ -5,10 +5,10 @@
 #include "engine/kernels/far_field.hpp"
 #include "engine/kernels/mobility_pair.hpp"
 #include "support/sanitizer.hpp"
+#include "support/threads.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <cmath>
-#include <omp.h>
 #include <random>
 #include <string>
 
@@ -251,7 +251,6 @@ TEST_CASE("vectorised direct product equals its reference twin (every path, thre
         }
     cases.push_back({"monodisperse lattice, 294 spheres", c});
   }
-  const int threads = omp_get_max_threads();
   for (const auto& cs : cases)
     for (Moments m : {Moments::F, Moments::FT, Moments::FTS}) {
       CAPTURE(cs.name);
@@ -276,11 +275,14 @@ TEST_CASE("vectorised direct product equals its reference twin (every path, thre
         CAPTURE(int(k));
         force_direct_kernels(k);
         VecX y1, y2;
-        omp_set_num_threads(1);
-        mobility_product(c.x, c.a, 0.7, m, v, y1);
-        omp_set_num_threads(std::max(2, threads));
-        mobility_product(c.x, c.a, 0.7, m, v, y2);
-        omp_set_num_threads(threads);
+        {
+          const test::ThreadCount one(1);
+          mobility_product(c.x, c.a, 0.7, m, v, y1);
+        }
+        {
+          const test::ThreadCount several(test::ThreadCount::kSeveral);
+          mobility_product(c.x, c.a, 0.7, m, v, y2);
+        }
         CHECK((y1 - ref).norm() <= 1e-13 * ref.norm());
         // Largest entry error against the reference, relative to the largest response.
         CHECK((y1 - ref).cwiseAbs().maxCoeff() <= 1e-13 * ref.cwiseAbs().maxCoeff());

@@ -6,9 +6,9 @@
 
 #include "engine/core/errors.hpp"
 #include "io/scene_toml.hpp"
+#include "support/threads.hpp"
 
 #include <doctest/doctest.h>
-#include <omp.h>
 
 #include <cmath>
 #include <functional>
@@ -506,12 +506,14 @@ TEST_CASE("Result does not depend on the number of threads") {
   Config c = random_config(400, 25.0, 41, {}, 0.0, domain);
   std::vector<Vec3> F1, F2;
   PairForceTotals t1, t2;
-  const int saved = omp_get_max_threads();
-  omp_set_num_threads(1);
-  add_pair_forces(laws, c.x, c.a, domain, F1, &t1);
-  omp_set_num_threads(2);
-  add_pair_forces(laws, c.x, c.a, domain, F2, &t2);
-  omp_set_num_threads(saved);
+  {
+    const test::ThreadCount one(1);
+    add_pair_forces(laws, c.x, c.a, domain, F1, &t1);
+  }
+  {
+    const test::ThreadCount two(2);
+    add_pair_forces(laws, c.x, c.a, domain, F2, &t2);
+  }
   // Serial scatter over a sorted pair list: bit-identical.
   for (std::size_t i = 0; i < F1.size(); ++i) CHECK((F1[i] - F2[i]).norm() == 0.0);
   CHECK(t1.energy == t2.energy);

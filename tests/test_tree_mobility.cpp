@@ -7,11 +7,11 @@
 #include "engine/kernels/far_field.hpp"
 #include "engine/simulation.hpp"
 #include "io/scene_toml.hpp"
+#include "support/threads.hpp"
 #include "trees/harmonic_expansion.hpp"
 #include "trees/octree.hpp"
 #include "trees/tree_mobility.hpp"
 
-#include <omp.h>
 
 #include <cmath>
 #include <cstdlib>
@@ -154,12 +154,15 @@ TEST_CASE("octree: every particle once, contiguous node ranges, radii bound the 
     }
   }
   // The level-parallel build gives the same tree on 1 and 2 threads.
-  const int threads = omp_get_max_threads();
-  omp_set_num_threads(1);
-  const Octree serial = build_octree(c.x, c.a, 8);
-  omp_set_num_threads(std::max(2, threads));
-  const Octree parallel = build_octree(c.x, c.a, 8);
-  omp_set_num_threads(threads);
+  Octree serial, parallel;
+  {
+    const test::ThreadCount one(1);
+    serial = build_octree(c.x, c.a, 8);
+  }
+  {
+    const test::ThreadCount several(test::ThreadCount::kSeveral);
+    parallel = build_octree(c.x, c.a, 8);
+  }
   CHECK(serial.order == parallel.order);
   REQUIRE(serial.nodes.size() == parallel.nodes.size());
   for (std::size_t k = 0; k < serial.nodes.size(); ++k) {
@@ -225,12 +228,14 @@ TEST_CASE("tree product: independent of the thread count, and its asymmetry boun
   tree.set_configuration({c.x, c.a, open});
   const VecX u = random_vector(tree.size(), 1), v = random_vector(tree.size(), 2);
   VecX y1, y2, Mv, Mu;
-  const int threads = omp_get_max_threads();
-  omp_set_num_threads(1);
-  tree.apply(u, y1);
-  omp_set_num_threads(std::max(2, threads));
-  tree.apply(u, y2);
-  omp_set_num_threads(threads);
+  {
+    const test::ThreadCount one(1);
+    tree.apply(u, y1);
+  }
+  {
+    const test::ThreadCount several(test::ThreadCount::kSeveral);
+    tree.apply(u, y2);
+  }
   CHECK((y1 - y2).norm() == 0.0);
   // u.(M v) - v.(M u) vanishes for the exact (symmetric) mobility.
   tree.apply(v, Mv);
