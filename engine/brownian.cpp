@@ -31,9 +31,9 @@
 // M^{-1} exactly (Chow & Saad 2014, SIAM J. Sci. Comput. 36, A588: preconditioned sampling); only
 // the Lanczos count depends on it. Applying G: A_k = sum_j F_j e^{-i k.x_j}, then
 // out_i += Re(e^{i k.x_i} W_k A_k), W_k = (c_k - 1)(2/N)(I - k k^T / k^2). Phases are products of
-// per-particle powers of e^{2 pi i s_d} (s = A^{-1} x, fractional coordinates), identical in both
-// passes. The forward sums are formed over fixed blocks of particles and added in block order, so
-// G does not depend on the thread count.
+// powers of e^{2 pi i s_d} (s = A^{-1} x, the fractional coordinates of Domain::fractional; the three
+// bases are kept per particle), identical in both passes. The forward sums are formed over fixed
+// blocks of particles and added in block order, so G does not depend on the thread count.
 
 namespace stokesian {
 
@@ -46,9 +46,8 @@ constexpr long kDeflationBlock = 256;
 
 using Cplx = std::complex<double>;
 
-// e^{2 pi i m s} for m = -nmax ... nmax into e[0 ... 2 nmax].
-void phase_powers(double s, int nmax, Cplx* e) {
-  const Cplx u = std::polar(1.0, 2.0 * kPi * s);
+// u^m for m = -nmax ... nmax into e[0 ... 2 nmax], |u| = 1.
+void phase_powers(Cplx u, int nmax, Cplx* e) {
   e[nmax] = 1.0;
   for (int m = 1; m <= nmax; ++m) {
     e[nmax + m] = e[nmax + m - 1] * u;
@@ -99,10 +98,10 @@ LongWaveDeflation::LongWaveDeflation(const Configuration& c, Moments m, double m
     w_.push_back((ck - 1.0) * (2.0 / double(np_)) * (Mat3::Identity() - kh * kh.transpose()));
     for (int d = 0; d < 3; ++d) nmax_[d] = std::max(nmax_[d], std::abs(q.n[std::size_t(d)]));
   }
-  s_.resize(std::size_t(3 * np_));
+  u_.resize(std::size_t(3 * np_));
   for (long i = 0; i < np_; ++i) {
-    const Vec3 s = A.inverse() * c.x[std::size_t(i)];
-    for (int d = 0; d < 3; ++d) s_[std::size_t(3 * i + d)] = s[d];
+    const Vec3 s = c.domain.fractional(c.x[std::size_t(i)]);
+    for (int d = 0; d < 3; ++d) u_[std::size_t(3 * i + d)] = std::polar(1.0, 2.0 * kPi * s[d]);
   }
 }
 
@@ -119,9 +118,9 @@ void LongWaveDeflation::apply(const VecX& in, VecX& out) const {
     for (long b = 0; b < nb; ++b) {
       Cplx* Ab = part.data() + b * K * 3;
       for (long i = b * kDeflationBlock; i < std::min(np_, (b + 1) * kDeflationBlock); ++i) {
-        phase_powers(s_[std::size_t(3 * i)], nmax_[0], e.data());
-        phase_powers(s_[std::size_t(3 * i + 1)], nmax_[1], e.data() + w0);
-        phase_powers(s_[std::size_t(3 * i + 2)], nmax_[2], e.data() + w0 + w1);
+        phase_powers(u_[std::size_t(3 * i)], nmax_[0], e.data());
+        phase_powers(u_[std::size_t(3 * i + 1)], nmax_[1], e.data() + w0);
+        phase_powers(u_[std::size_t(3 * i + 2)], nmax_[2], e.data() + w0 + w1);
         const double f0 = in[i * d_], f1 = in[i * d_ + 1], f2 = in[i * d_ + 2];
         for (long k = 0; k < K; ++k) {
           const auto& n = n_[std::size_t(k)];
@@ -147,9 +146,9 @@ void LongWaveDeflation::apply(const VecX& in, VecX& out) const {
     std::vector<Cplx> e(std::size_t(w0 + w1 + w2));
 #pragma omp for schedule(static)
     for (long i = 0; i < np_; ++i) {
-      phase_powers(s_[std::size_t(3 * i)], nmax_[0], e.data());
-      phase_powers(s_[std::size_t(3 * i + 1)], nmax_[1], e.data() + w0);
-      phase_powers(s_[std::size_t(3 * i + 2)], nmax_[2], e.data() + w0 + w1);
+      phase_powers(u_[std::size_t(3 * i)], nmax_[0], e.data());
+      phase_powers(u_[std::size_t(3 * i + 1)], nmax_[1], e.data() + w0);
+      phase_powers(u_[std::size_t(3 * i + 2)], nmax_[2], e.data() + w0 + w1);
       double u0 = 0.0, u1 = 0.0, u2 = 0.0;
       for (long k = 0; k < K; ++k) {
         const auto& n = n_[std::size_t(k)];

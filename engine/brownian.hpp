@@ -38,6 +38,7 @@
 #include "engine/core/operators.hpp"
 
 #include <array>
+#include <complex>
 #include <vector>
 
 namespace stokesian {
@@ -78,7 +79,7 @@ class LongWaveDeflation {
   int nmax_[3] = {0, 0, 0};
   std::vector<std::array<int, 3>> n_;  // integer wave vectors, k = 2 pi A^{-T} n
   std::vector<Mat3> w_;                // (c_k - 1) (2 / N) (I - k k^T / k^2) per wave vector
-  std::vector<double> s_;              // fractional coordinates, 3 per particle
+  std::vector<std::complex<double>> u_;  // e^{2 pi i s_d}, s the fractional coordinates, 3 per particle
 };
 
 // y = G (G M G)^{-1/2} psi, G = LongWaveDeflation(c) (the identity outside periodic boxes), by
