@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <complex>
 #include <limits>
 #include <map>
 #include <mutex>
@@ -19,14 +20,12 @@
 namespace stokesian::ewald {
 namespace {
 
-// Achieved / modelled error: the model is an rms estimate; kSafety places the achieved error
-// between tol / 10 and tol. Measured with 0.4 (bench/bench_pme.cpp, 138 rows, N = 10^3-10^6,
-// phi 0.1 and 0.4, F and FTS, tol 1e-3-1e-6): achieved / requested 0.13-1.07, the top one F at
-// N = 10^4, phi = 0.1, tol 1e-4; 0.34 scales that to about 0.11-0.91 (tests/test_ewald.cpp).
-constexpr double kSafety = 0.34;
-// Edge-jump error per unit jump (pme_edge_error), measured with probes of the aliasing error
-// against the window shape at fixed grid (FT, N = 2000, phi = 0.4; docs/ewald.md s.5).
-constexpr double kEdge = 0.065;
+// Achieved / modelled error: the model is an rms estimate relative to the self scale S, the
+// achieved error is relative to |M x|, which exceeds S by 1.5-3.3 at N = 10^4 (the long-range pair
+// sum); kSafety places the achieved error between tol / 10 and tol. With 0.7 (2026-11-29): 0.13-0.29 tol
+// at N = 10^4 (bench_pme_parts), 0.38-0.84 tol for 5-60 monodisperse spheres, 0.08-0.30 polydisperse
+// and 0.005-0.21 polydisperse sheared (tests/test_ewald.cpp, "requested tolerance met").
+constexpr double kSafety = 0.7;
 
 // Cost per unit of the model [s] on the reference machine (2-core AMD EPYC VM, one thread), measured
 // 2026-11-24: real-space pairs by bench/bench_pme_real.cpp (with and without the per-entry scalar
@@ -152,61 +151,205 @@ double pme_wave_error2(double k_in, double xi, double a, double rho, Moments m) 
   return rho * c * pair + c * c * self;
 }
 
+namespace {
+
+// Per-axis deviation of the sampled window from the ideal one (pme_parameters.hpp, "aliasing and
+// edges"): for nu in cycles per grid spacing, D_q(nu, tau) = A_q(nu, tau) - I_q(nu) with
+//   A_q = sum_p phi^(q)(delta_p) e^{-2 pi i nu delta_p},  delta_p = -P/2 + p + tau,  I_q = (2 pi i nu)^q phihat(nu),
+// and out[q][q'] = mean over tau in [0, 1) of conj(D_q) D_q' (32-point Gauss-Legendre in tau: A_q is
+// smooth inside the interval; the support's jump sits at its ends).
+class WindowDeviation {
+ public:
+  explicit WindowDeviation(const Window1D& w) : w_(w), P_(w.support()) {
+    const Quadrature& q = rule(32);
+    const std::size_t nt = q.x.size();
+    tau_.resize(nt);
+    wt_.resize(nt);
+    phi_.resize(nt * 4 * std::size_t(P_));
+    for (std::size_t t = 0; t < nt; ++t) {
+      tau_[t] = 0.5 * (q.x[t] + 1.0);
+      wt_[t] = 0.5 * q.w[t];
+      for (int p = 0; p < P_; ++p) {
+        double v[4];
+        w.derivatives(-0.5 * P_ + p + tau_[t], v);
+        for (int d = 0; d < 4; ++d) phi_[(t * 4 + std::size_t(d)) * std::size_t(P_) + std::size_t(p)] = v[d];
+      }
+    }
+  }
+  void moments(double nu, std::complex<double> out[4][4]) const {
+    using C = std::complex<double>;
+    const C iw(0.0, 2.0 * kPi * nu);
+    C ideal[4];
+    ideal[0] = w_.transform(nu);
+    for (int q = 1; q < 4; ++q) ideal[q] = ideal[q - 1] * iw;
+    for (int q = 0; q < 4; ++q)
+      for (int r = 0; r < 4; ++r) out[q][r] = 0.0;
+    const C step = std::polar(1.0, -2.0 * kPi * nu);
+    for (std::size_t t = 0; t < tau_.size(); ++t) {
+      C e = std::polar(1.0, -2.0 * kPi * nu * (-0.5 * P_ + tau_[t])), A[4] = {0.0, 0.0, 0.0, 0.0};
+      const double* f = &phi_[t * 4 * std::size_t(P_)];
+      for (int p = 0; p < P_; ++p, e *= step)
+        for (int q = 0; q < 4; ++q) A[q] += f[q * P_ + p] * e;
+      for (int q = 0; q < 4; ++q) A[q] -= ideal[q];
+      for (int q = 0; q < 4; ++q)
+        for (int r = 0; r < 4; ++r) out[q][r] += wt_[t] * std::conj(A[q]) * A[r];
+    }
+  }
+  double transform(double nu) const { return w_.transform(nu); }
+
+ private:
+  Window1D w_;
+  int P_;
+  std::vector<double> tau_, wt_, phi_;
+};
+
+// Quadrature nodes of the aliasing model with everything that does not depend on the window
+// (pme_parameters.hpp): per axis d, k_d over [-K_d/2, K_d/2] (two 16-point panels) and k_perp over
+// [0, K_perp/2] (two 16-point panels, cylindrical about e_d). Per node: the volume weight, g, alpha,
+// and t_qq' = tr(P_k Rt_q^+ Rt_q') J^(q+q'), Rt_q the coefficient of k_d^q in R(k) (R is a cubic
+// polynomial in k_d at fixed k_perp). t comes from Q(x, y) = tr(P_k R(k_perp + x e_d)^+ R(k_perp + y e_d)),
+// in closed form per moment level, at four nodes in x and y and the inverse Vandermonde matrix.
+class AliasModel {
+ public:
+  AliasModel(const std::array<int, 3>& M, const Vec3& lengths, double xi, double a, double rho, Moments m)
+      : rho_(rho) {
+    const Quadrature& q = rule(16);
+    for (int d = 0; d < 3; ++d) {
+      // Axes with the same grid spacing and the same perpendicular grid are the same integral.
+      bool same = false;
+      for (Axis& prev : axis_)
+        if (prev.weight > 0 && prev.M == M[d] && prev.length == lengths[d] && prev.perp == perp_key(M, lengths, d)) {
+          ++prev.weight;
+          same = true;
+          break;
+        }
+      if (same) continue;
+      axis_.emplace_back();
+      Axis& ax = axis_.back();
+      ax.M = M[d];
+      ax.length = lengths[d];
+      ax.perp = perp_key(M, lengths, d);
+      ax.weight = 1;
+      ax.K = 2.0 * kPi * M[d] / lengths[d];
+      const double J = M[d] / lengths[d];
+      double Kp = std::numeric_limits<double>::infinity();
+      for (int e = 0; e < 3; ++e)
+        if (e != d) Kp = std::min(Kp, 2.0 * kPi * M[e] / lengths[e]);
+      // Vandermonde nodes in x = k_d and its inverse.
+      const double s = 0.5 * ax.K;
+      const double xs[4] = {-s, -s / 3.0, s / 3.0, s};
+      Eigen::Matrix4d V;
+      for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) V(i, j) = std::pow(xs[i], j);
+      const Eigen::Matrix4d Vi = V.inverse();
+      for (int pd = 0; pd < 2; ++pd)
+        for (std::size_t i = 0; i < q.x.size(); ++i) {
+          const double kd = 0.25 * ax.K * (q.x[i] + (pd == 0 ? -1.0 : 1.0)), wd = 0.25 * ax.K * q.w[i];
+          ax.nu.push_back(kd / ax.K);
+          for (int pp = 0; pp < 2; ++pp)
+            for (std::size_t j = 0; j < q.x.size(); ++j) {
+              const double kp = 0.125 * Kp * (q.x[j] + (pp == 0 ? 1.0 : 3.0)), wp = 0.125 * Kp * q.w[j];
+              const double k2 = kd * kd + kp * kp;
+              Node n;
+              n.vol = wd * wp * 2.0 * kPi * kp;
+              n.g = g_of(k2, xi);
+              n.alpha = response(k2, a, m).alpha;
+              Eigen::Matrix4d Qm;
+              for (int ix = 0; ix < 4; ++ix)
+                for (int iy = 0; iy < 4; ++iy) Qm(ix, iy) = pair_trace(kd, kp, xs[ix], xs[iy], a, m);
+              const Eigen::Matrix4d t = Vi * Qm * Vi.transpose();
+              for (int r = 0; r < 4; ++r)
+                for (int c = 0; c < 4; ++c) n.t[r][c] = t(r, c) * std::pow(J, r + c);
+              ax.node.push_back(n);
+            }
+        }
+      ax.per_nu = 2 * q.x.size();
+    }
+  }
+
+  // e_A^2 for window w (pme_parameters.hpp).
+  double error2(const Window1D& w) const {
+    using C = std::complex<double>;
+    const WindowDeviation dev(w);
+    // i^q (-i)^q' of conj(D_q) D_q' with D_q multiplied by (-i)^q (the k_d^q coefficients).
+    C phase[4][4];
+    for (int r = 0; r < 4; ++r)
+      for (int c = 0; c < 4; ++c) phase[r][c] = std::pow(C(0.0, 1.0), r) * std::pow(C(0.0, -1.0), c);
+    double pair = 0.0, self = 0.0;
+    for (const Axis& ax : axis_) {
+      double bound = 0.0, pair_axis = 0.0;
+      for (std::size_t i = 0; i < ax.nu.size(); ++i) {
+        C v[4][4];
+        dev.moments(ax.nu[i], v);
+        const double main = dev.transform(ax.nu[i]);
+        C w4[4][4];
+        for (int r = 0; r < 4; ++r)
+          for (int c = 0; c < 4; ++c) w4[r][c] = v[r][c] * phase[r][c] / (main * main);
+        for (std::size_t j = 0; j < ax.per_nu; ++j) {
+          const Node& n = ax.node[i * ax.per_nu + j];
+          double X = 0.0;
+          for (int r = 0; r < 4; ++r)
+            for (int c = 0; c < 4; ++c) X += (w4[r][c] * n.t[r][c]).real();
+          X = std::max(X, 0.0) * n.alpha;
+          pair_axis += n.vol * n.g * n.g * X;
+          bound += n.vol * n.g * std::sqrt(X);
+        }
+      }
+      pair_axis *= ax.weight;
+      pair += pair_axis;
+      self += ax.weight * bound * bound;
+    }
+    const double c = 1.0 / std::pow(2.0 * kPi, 3);
+    return 2.0 * (rho_ * c * pair + c * c * self);
+  }
+
+ private:
+  // tr(P_k R(k1)^+ R(k2)) with k = (kp, 0, kd), k1 = (kp, 0, x), k2 = (kp, 0, y) in a frame whose third
+  // axis is e_d: P_F1 P_F2 tr P_k + P_T1 P_T2 [2 c_a k1.k2 + c_b (k1.k2 - (k.k1)(k.k2)/k^2)], from
+  // R(k1)^+ R(k2) = P_F1 P_F2 I + P_T1 P_T2 [(1/4)(k1.k2 I - k2 k1^T) (rotation rows)
+  //                 + (1/2)(k1.k2 I + k2 k1^T) - (1/3) k1 k2^T (strain rows)]  (ewald_split.hpp).
+  static double pair_trace(double kd, double kp, double x, double y, double a, Moments m) {
+    const double kp2 = kp * kp, k2 = kd * kd + kp2;
+    const double k12 = kp2 + x * y, kk1 = kp2 + kd * x, kk2 = kp2 + kd * y;
+    const double a2 = a * a, q1 = kp2 + x * x, q2 = kp2 + y * y;
+    const double pf = (1.0 - a2 * q1 / 6.0) * (1.0 - a2 * q2 / 6.0);
+    double out = 2.0 * pf;
+    if (m == Moments::F) return out;
+    const double pt = (1.0 - a2 * q1 / 10.0) * (1.0 - a2 * q2 / 10.0);
+    const double perp = k12 - kk1 * kk2 / k2;
+    if (m == Moments::FT) return out + pt * (0.5 * k12 - 0.25 * perp);
+    return out + pt * (1.5 * k12 - perp / 12.0);
+  }
+  struct Node {
+    double vol, g, alpha;
+    double t[4][4];
+  };
+  static std::array<double, 2> perp_key(const std::array<int, 3>& M, const Vec3& lengths, int d) {
+    std::array<double, 2> k{};
+    int i = 0;
+    for (int e = 0; e < 3; ++e)
+      if (e != d) k[std::size_t(i++)] = M[e] / lengths[e];
+    if (k[0] > k[1]) std::swap(k[0], k[1]);
+    return k;
+  }
+  struct Axis {
+    int M = 0, weight = 0;
+    double length = 0.0;
+    std::array<double, 2> perp{};
+    double K = 0.0;
+    std::vector<double> nu;
+    std::vector<Node> node;  // [nu][k_perp]
+    std::size_t per_nu = 0;
+  };
+  std::vector<Axis> axis_;  // distinct axes, each with its multiplicity
+  double rho_;
+};
+
+}  // namespace
+
 double pme_alias_error2(const std::array<int, 3>& M, const Vec3& lengths, const Window1D& w, double xi, double a,
                         double rho, Moments m) {
-  // Pairs: Parseval over random positions (header). Self: the alias of a particle on itself is
-  // coherent over k, with a phase set by its sub-grid position; per alias (d, m) it is bounded by
-  // the integral of ||R(k) G(k) R(k_m)^+||_F |phihat ratio|, and the aliases add in quadrature.
-  const Quadrature& q = rule(16);
-  double pair = 0.0, self = 0.0;
-  for (int d = 0; d < 3; ++d) {
-    const double K = 2.0 * kPi * M[d] / lengths[d];
-    double Kp = std::numeric_limits<double>::infinity();
-    for (int e = 0; e < 3; ++e)
-      if (e != d) Kp = std::min(Kp, 2.0 * kPi * M[e] / lengths[e]);
-    double bound[2] = {0.0, 0.0};
-    // k_d over [-K/2, K/2] (two panels), k_perp over [0, Kp/2] (two panels).
-    for (int pd = 0; pd < 2; ++pd)
-      for (std::size_t i = 0; i < q.x.size(); ++i) {
-        const double kd = 0.25 * K * (q.x[i] + (pd == 0 ? -1.0 : 1.0)), wd = 0.25 * K * q.w[i];
-        const double nu = kd / K, main = w.transform(nu);
-        double ratio[2];
-        for (int s = 0; s < 2; ++s) ratio[s] = std::abs(w.transform(nu + (s == 0 ? -1.0 : 1.0)) / main);
-        for (int pp = 0; pp < 2; ++pp)
-          for (std::size_t j = 0; j < q.x.size(); ++j) {
-            const double kp = 0.125 * Kp * (q.x[j] + (pp == 0 ? 1.0 : 3.0)), wp = 0.125 * Kp * q.w[j];
-            const double k2 = kd * kd + kp * kp;
-            if (k2 <= 0.0) continue;
-            const double g = g_of(k2, xi), vol = wd * wp * 2.0 * kPi * kp;
-            const AlphaBeta ab = response(k2, a, m);
-            for (int s = 0; s < 2; ++s) {
-              const double km = kd + (s == 0 ? -K : K), km2 = km * km + kp * kp;
-              const AlphaBeta abm = response(km2, a, m);
-              const double perp2 = kp * kp * K * K / k2;  // |P_k k_m|^2
-              const double t = std::max(0.0, ab.alpha * (2.0 * abm.alpha + abm.beta * perp2));
-              pair += vol * g * g * t * ratio[s] * ratio[s];
-              bound[s] += vol * g * std::sqrt(t) * ratio[s];
-            }
-          }
-      }
-    self += bound[0] * bound[0] + bound[1] * bound[1];
-  }
-  const double c = 1.0 / std::pow(2.0 * kPi, 3);
-  return 2.0 * (rho * c * pair + c * c * self);
-}
-
-double pme_edge_error(const Window1D& w, double grid_density, double a, Moments m) {
-  // The windows are truncated at |delta| = P/2, where phi and its derivatives are small but not
-  // zero; the gradient and Faxen windows (spread.hpp) jump by the edge values of the first three
-  // derivatives there. Those jumps spread broadband errors; measured, their effect on M x relative
-  // to S is kEdge times the largest jump weighted as in the windows, c_j (M/L)^j |phi^(j)(P/2)|.
-  double e[4];
-  w.derivatives(0.5 * w.support() * (1.0 - 1e-12), e);
-  const double g = grid_density;
-  double worst = std::max(std::abs(e[0]), a * a / 6.0 * g * g * std::abs(e[2]));
-  if (m != Moments::F)
-    worst = std::max({worst, g * std::abs(e[1]), a * a / 10.0 * g * g * g * std::abs(e[3])});
-  return kEdge * worst;
+  return AliasModel(M, lengths, xi, a, rho, m).error2(w);
 }
 
 namespace {
@@ -269,6 +412,11 @@ PmeParameters search(double tol, const Lattice& lattice, int n, double a_min, do
     return e;
   };
 
+  // Wave truncation: the worse of the smallest and the largest sphere (see the aliasing below).
+  auto wave_error2 = [&](double k_in, double xi) {
+    return std::max(pme_wave_error2(k_in, xi, a_max, rho, m), pme_wave_error2(k_in, xi, a_min, rho, m));
+  };
+
   std::vector<double> neighbours;
   if (opt.neighbours > 0.0) neighbours = {opt.neighbours};
   else
@@ -294,10 +442,10 @@ PmeParameters search(double tol, const Lattice& lattice, int n, double a_min, do
     const double xi = hi;
     // k_in: smallest with e_K^2 <= budget.
     double klo = 0.0, khi = 2.0 * xi;
-    while (pme_wave_error2(khi, xi, a_max, rho, m) > budget) khi *= 1.5;
+    while (wave_error2(khi, xi) > budget) khi *= 1.5;
     for (int it = 0; it < 30; ++it) {
       const double mid = 0.5 * (klo + khi);
-      (pme_wave_error2(mid, xi, a_max, rho, m) > budget ? klo : khi) = mid;
+      (wave_error2(mid, xi) > budget ? klo : khi) = mid;
     }
     const double k_in = khi;
     const double pairs = 0.5 * n * std::min(double(n - 1), rho * 4.0 / 3.0 * kPi * std::pow(gap + 2.0 * a_max, 3));
@@ -310,8 +458,14 @@ PmeParameters search(double tol, const Lattice& lattice, int n, double a_min, do
       const double fixed =
           (cached ? cc.pair_cached : cc.pair) * pairs + 6.0 * kFft * G * std::log2(G) + kGrid * G + setup_pairs;
       if (fixed >= best_cost) continue;
-      double density_max = 0.0;  // grid points per unit length, largest direction
-      for (int d = 0; d < 3; ++d) density_max = std::max(density_max, M[d] / len[d]);
+      // The largest sphere's Faxen factors damp the modes near k = sqrt(6) / a_max where the smallest
+      // sphere's do not: both radii are modelled and the worse one kept.
+      const AliasModel alias_max(M, len, xi, a_max, rho, m);
+      std::optional<AliasModel> alias_min;
+      if (a_min < a_max) alias_min.emplace(M, len, xi, a_min, rho, m);
+      auto alias_error2 = [&](const Window1D& w) {
+        return std::max(alias_max.error2(w), alias_min ? alias_min->error2(w) : 0.0);
+      };
       // Effective upsampling of the grid actually used (fft_size rounds up).
       double sig = std::numeric_limits<double>::infinity();
       for (int d = 0; d < 3; ++d) sig = std::min(sig, M[d] * kPi / (k_in * len[d]));
@@ -322,19 +476,17 @@ PmeParameters search(double tol, const Lattice& lattice, int n, double a_min, do
         if (opt.window == WindowKind::kaiser_bessel) {
           for (double kappa : {0.9, 1.0, 1.1, 1.2, 1.3, 1.4, 1.5}) {
             const double beta = kappa * kPi * P * (1.0 - 0.5 / std::max(sig, 1.0));
-            const Window1D w(WindowKind::kaiser_bessel, P, beta);
-            const double edge = pme_edge_error(w, density_max, a_max, m);
-            const double e = pme_alias_error2(M, len, w, xi, a_max, rho, m) + edge * edge * S2;
+            const double e = alias_error2(Window1D(WindowKind::kaiser_bessel, P, beta));
             if (e < best_e) best_e = e, best_shape = beta;
           }
         } else {
-          // The Gaussian's transform ignores its truncation: the edge value exp(-P^2 / (8 s^2)) is
-          // held a decade below the tolerance, which fixes s.
-          const double s = P / (2.0 * std::sqrt(2.0 * std::log(10.0 / (kSafety * tol))));
-          const Window1D w(WindowKind::gaussian, P, s);
-          const double edge = pme_edge_error(w, density_max, a_max, m);
-          best_e = pme_alias_error2(M, len, w, xi, a_max, rho, m) + edge * edge * S2;
-          best_shape = s;
+          // Widths around the one whose edge value exp(-P^2 / (8 s^2)) is a decade below the
+          // tolerance; the model counts the truncation (its edge jumps) exactly.
+          const double s0 = P / (2.0 * std::sqrt(2.0 * std::log(10.0 / (kSafety * tol))));
+          for (double f : {0.6, 0.7, 0.8, 0.9, 1.0, 1.1}) {
+            const double e = alias_error2(Window1D(WindowKind::gaussian, P, f * s0));
+            if (e < best_e) best_e = e, best_shape = f * s0;
+          }
         }
         if (best_e > budget) continue;
         best_cost = cost;
@@ -345,7 +497,7 @@ PmeParameters search(double tol, const Lattice& lattice, int n, double a_min, do
         best.shape = best_shape;
         best.k_max = k_in * sig;
         best.est_real = std::sqrt(real_error2(gap, xi) / S2);
-        best.est_wave = std::sqrt(pme_wave_error2(k_in, xi, a_max, rho, m) / S2);
+        best.est_wave = std::sqrt(wave_error2(k_in, xi) / S2);
         best.est_alias = std::sqrt(best_e / S2);
         best.est_cost = cost;
         best.est_setup = kSetupParticle * n + kSetupWindow * n * P + setup_entry(m) * 2.0 * pairs;

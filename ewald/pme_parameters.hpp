@@ -12,18 +12,30 @@
 //     e_R^2 = rho int_{r_c}^inf 4 pi r^2 ||B_real(r)||_F^2 dr               (blocks of ewald_split.hpp)
 //   wave truncation (modes outside the grid, |k| > k_in = min_d pi M_d / |a_d|):
 //     e_K^2 = rho / (2 pi)^3 int_{|k|>k_in} 4 pi k^2 g(k)^2 2 alpha(k)^2 dk,   g = H(k) / (mu k^2)
-//   window aliasing (spreading and interpolation, nearest aliases k_m = k + m K_d e_d, K_d = 2 pi M_d / |a_d|):
-//     e_A^2 = 2 rho / (2 pi)^3 sum_d sum_{m = +-1} int_box g(k)^2 alpha(k) [2 alpha(k_m) + beta(k_m) |P_k k_m|^2]
-//             (phihat(nu_d + m) / phihat(nu_d))^2 d^3k,   nu_d = k_d / K_d,
+//   aliasing and edges (spreading and interpolation): a particle at sub-grid offset tau_d spreads, per
+//   axis and grid mode nu = k_d / K_d (K_d = 2 pi M_d / |a_d|), A_q(nu, tau) = sum_p phi^(q)(delta_p)
+//   e^{-2 pi i nu delta_p} for its window derivatives q = 0..3 (the P sampled points), where the ideal is
+//   I_q = (2 pi i nu)^q phihat(nu). The deviation D_q = A_q - I_q holds every alias along the axis and
+//   the jumps of the truncated window and its derivatives at |delta| = P/2; its moments over the
+//   offset, V_qq'(nu) = <conj(D_q) D_q'>_tau, follow by quadrature in tau. R(k) is a cubic polynomial
+//   in k_d, R = sum_q k_d^q Rt_q, so one axis's deviation gives, per grid mode,
+//     X_d(k) = alpha(k) sum_qq' Re[V_qq' i^q (-i)^q'] J_d^(q+q') tr(P_k Rt_q^+ Rt_q') / phihat(nu_d)^2,
+//   J_d = M_d / |a_d|, and, first order in the deviations (one axis at a time),
+//     e_A^2 = 2 [rho / (2 pi)^3 sum_d int g^2 X_d d^3k + (1 / (2 pi)^3)^2 sum_d (int g sqrt(X_d) d^3k)^2]
+//   (pairs by Parseval over random positions; the particle's own deviation is coherent over k and
+//   bounded by the second term; 2: spreading and interpolation), integrated over the cylinder
+//   |k_d| <= K_d / 2, |k_perp| <= min K_perp / 2. The traces come in closed form from
+//   R(k1)^+ R(k2) = P_F1 P_F2 I + P_T1 P_T2 [(k1.k2 I - k2 k1^T) / 4 (rotation rows)
+//                   + (k1.k2 I + k2 k1^T) / 2 - k1 k2^T / 3 (strain rows)].
 // where R(k)^+ R(k) = alpha(k) I + beta(k) k k^T collects the response operator of ewald_split.hpp
 // (Faxen factors P_F = 1 - a^2 k^2 / 6, P_T = 1 - a^2 k^2 / 10):
 //     F: alpha = P_F^2, beta = 0;  FT: alpha = P_F^2 + k^2 P_T^2 / 4, beta = -P_T^2 / 4;
-//     FTS: alpha = P_F^2 + 3 k^2 P_T^2 / 4, beta = -P_T^2 / 12,
-// so that ||R(k) G(k) R(k')^+||_F^2 = g^2 alpha(k) tr(P_k (alpha(k') I + beta(k') k' k'^T)) in closed form
-// (P_k = I - k k / k^2). The aliasing integral is done in cylindrical coordinates around e_d, about
-// which k and k_m rotate together. Each part gets a third of (kSafety tol)^2 S^2; kSafety
-// (pme_parameters.cpp) is the one calibration constant, set from the measured errors so that the
-// achieved error lies between tol / 10 and tol (docs/ewald.md s.5).
+//     FTS: alpha = P_F^2 + 3 k^2 P_T^2 / 4, beta = -P_T^2 / 12.
+// Wave truncation and aliasing are evaluated for the smallest and the largest radius and the worse
+// kept (the largest sphere's Faxen factors vanish near k a = sqrt(6), the smallest sphere's do not).
+// Each part gets a third of (kSafety tol)^2 S^2; kSafety (pme_parameters.cpp) is the one calibration
+// constant, set from the measured errors so that the achieved error lies between tol / 10 and tol
+// (docs/ewald.md s.5).
 // Cost model. Among all (cutoff, grid upsampling sigma, support P, window shape) meeting the three
 // bounds, the cheapest per product by
 //     t = c_pair(m) pairs + 2 c_point(m) N P^3 + 6 c_fft G log2 G + c_grid G,   G = M0 M1 M2,
@@ -90,14 +102,11 @@ PmeParameters pme_parameters(double tol, const Lattice& lattice, int n, double a
 int fft_size(int n);
 
 // The model's parts, exposed for tests and benchmarks: e_R^2, e_K^2, e_A^2 (not divided by S^2)
-// for radius a, density rho and moments m.
+// for radius a, density rho and moments m; e_A^2 includes the window's edge jumps.
 double pme_real_error2(double cutoff_gap, double xi, double a_i, double a_j, double rho, Moments m);
 double pme_wave_error2(double k_in, double xi, double a, double rho, Moments m);
 double pme_alias_error2(const std::array<int, 3>& M, const Vec3& lengths, const Window1D& w, double xi, double a,
                         double rho, Moments m);
 double pme_self_scale2(double a, Moments m);
-// Relative error from the jumps of the truncated window and its derivatives at |delta| = P/2
-// (grid_density: grid points per unit length).
-double pme_edge_error(const Window1D& w, double grid_density, double a, Moments m);
 
 }  // namespace stokesian::ewald
