@@ -158,7 +158,14 @@ TEST_CASE("real space: the per-radius-class tables agree with the general ones (
     const auto [amin, amax] = std::minmax_element(c.a.begin(), c.a.end());
     for (double tol : {1e-2, 1e-4, 1e-6, 1e-8, 1e-10, 1e-12})
       for (Moments m : {Moments::F, Moments::FT, Moments::FTS}) {
-        const ewald::PmeParameters p = ewald::pme_parameters(tol, lat, int(c.x.size()), *amin, *amax, m, options());
+        // 60 neighbours force xi near 1 / a: at 1e-12 with radii 1 and 2.5 (FT) no window of at most 32
+        // points meets the aliasing-and-edge model there; the free search's parameters are used instead.
+        ewald::PmeParameters p;
+        try {
+          p = ewald::pme_parameters(tol, lat, int(c.x.size()), *amin, *amax, m, options());
+        } catch (const std::invalid_argument&) {
+          p = ewald::pme_parameters(tol, lat, int(c.x.size()), *amin, *amax, m);
+        }
         const VecX in = random_vector(long(c.x.size()) * dof_per_particle(m), 17);
         ewald::RealSpaceSum::force_general_tables(true);
         const ewald::RealSpaceSum general(c.x, c.a, c.domain, p.cutoff_gap, p.xi, mu, m, tol, 0);
