@@ -218,7 +218,7 @@ class AliasModel {
       // Axes with the same grid spacing and the same perpendicular grid are the same integral.
       bool same = false;
       for (Axis& prev : axis_)
-        if (prev.weight > 0 && prev.M == M[d] && prev.length == lengths[d] && prev.perp == perp_key(M, lengths, d)) {
+        if (prev.M == M[d] && prev.length == lengths[d] && prev.perp == perp_key(M, lengths, d)) {
           ++prev.weight;
           same = true;
           break;
@@ -414,7 +414,8 @@ PmeParameters search(double tol, const Lattice& lattice, int n, double a_min, do
 
   // Wave truncation: the worse of the smallest and the largest sphere (see the aliasing below).
   auto wave_error2 = [&](double k_in, double xi) {
-    return std::max(pme_wave_error2(k_in, xi, a_max, rho, m), pme_wave_error2(k_in, xi, a_min, rho, m));
+    const double e = pme_wave_error2(k_in, xi, a_max, rho, m);
+    return a_min < a_max ? std::max(e, pme_wave_error2(k_in, xi, a_min, rho, m)) : e;
   };
 
   std::vector<double> neighbours;

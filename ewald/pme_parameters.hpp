@@ -26,8 +26,8 @@
 //   bounded by the second term; 2: spreading and interpolation), integrated over the cylinder
 //   |k_d| <= K_d / 2, |k_perp| <= min K_perp / 2. The traces come in closed form from
 //   R(k1)^+ R(k2) = P_F1 P_F2 I + P_T1 P_T2 [(k1.k2 I - k2 k1^T) / 4 (rotation rows)
-//                   + (k1.k2 I + k2 k1^T) / 2 - k1 k2^T / 3 (strain rows)].
-// where R(k)^+ R(k) = alpha(k) I + beta(k) k k^T collects the response operator of ewald_split.hpp
+//                   + (k1.k2 I + k2 k1^T) / 2 - k1 k2^T / 3 (strain rows)],
+// and with k1 = k2 = k they give R(k)^+ R(k) = alpha(k) I + beta(k) k k^T (ewald_split.hpp's response operator)
 // (Faxen factors P_F = 1 - a^2 k^2 / 6, P_T = 1 - a^2 k^2 / 10):
 //     F: alpha = P_F^2, beta = 0;  FT: alpha = P_F^2 + k^2 P_T^2 / 4, beta = -P_T^2 / 4;
 //     FTS: alpha = P_F^2 + 3 k^2 P_T^2 / 4, beta = -P_T^2 / 12.
