@@ -1,7 +1,7 @@
 // The PME error model part by part (issue 12): each part's achieved error against its estimate
-// (ewald/pme_parameters.hpp: est_real, est_wave, est_alias). The achieved/requested ratio of the
-// whole product scatters over 0.08-1.02 (bench/results/pme.json); this driver shows which estimate
-// causes it. For the engine's parameters at tolerance tol, the product's relative error against a
+// (ewald/pme_parameters.hpp: est_real, est_wave, est_alias; est_alias includes the window's edge
+// jumps), which shows which estimate sets the achieved/requested ratio of the whole product
+// (docs/ewald.md s.5). For the engine's parameters at tolerance tol, the product's relative error against a
 // 1e-10 PME reference, and three variants with one or two parts made negligible (PmeOptions::fixed):
 //   real_only   the same xi and cutoff, grid doubled per direction, support +6 (window shape scaled
 //               with it): wave truncation and aliasing vanish, the real-space truncation remains;

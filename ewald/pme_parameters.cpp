@@ -20,11 +20,10 @@
 namespace stokesian::ewald {
 namespace {
 
-// Achieved / modelled error: the model is an rms estimate relative to the self scale S, the
-// achieved error is relative to |M x|, which exceeds S by 1.5-3.3 at N = 10^4 (the long-range pair
-// sum); kSafety places the achieved error between tol / 10 and tol. With 0.7 (2026-11-29): 0.13-0.29 tol
-// at N = 10^4 (bench_pme_parts), 0.38-0.84 tol for 5-60 monodisperse spheres, 0.08-0.30 polydisperse
-// and 0.005-0.21 polydisperse sheared (tests/test_ewald.cpp, "requested tolerance met").
+// Achieved / modelled error: kSafety places the achieved error between tol / 10 and tol. With 0.7
+// (2026-11-29): 0.40-0.51 tol at N = 10^4 (bench_pme_parts), 0.44-0.85 tol for 5-60 monodisperse
+// spheres, 0.08-0.31 polydisperse and 0.005-0.21 polydisperse sheared (tests/test_ewald.cpp,
+// "requested tolerance met"; the model takes the worse radius for each part).
 constexpr double kSafety = 0.7;
 
 // Cost per unit of the model [s] on the reference machine (2-core AMD EPYC VM, one thread), measured
@@ -111,6 +110,34 @@ double pme_self_scale2(double a, Moments m) {
   if (m != Moments::F) s2 += 3.0 * s.xc * s.xc;
   if (m == Moments::FTS) s2 += 5.0 * s.xm * s.xm;
   return s2;
+}
+
+double pme_pair_scale2(const Vec3& box, double a, double rho, Moments m) {
+  // (rho / V) sum_{k != 0} 2 alpha(k)^2 / k^4 with the full Faxen functions, j0(ka) (force kind) and
+  // 3 j1(ka) / (ka) (torque kind), in place of their truncations: the lattice sum for |k| < k_c, the
+  // continuum rho / (2 pi)^3 int 4 pi k^2 (...) dk beyond.
+  auto f = [&](double k2) {
+    const double k = std::sqrt(k2), x = k * a;
+    const double gf = x < 1e-4 ? 1.0 - x * x / 6.0 : std::sin(x) / x;
+    const double gt = x < 1e-3 ? 1.0 - x * x / 10.0 : 3.0 * (std::sin(x) - x * std::cos(x)) / (x * x * x);
+    double alpha = gf * gf;
+    if (m == Moments::FT) alpha += 0.25 * k2 * gt * gt;
+    if (m == Moments::FTS) alpha += 0.75 * k2 * gt * gt;
+    return 2.0 * alpha * alpha / (k2 * k2);
+  };
+  const double V = box.x() * box.y() * box.z();
+  const Vec3 dk(2.0 * kPi / box.x(), 2.0 * kPi / box.y(), 2.0 * kPi / box.z());
+  const double kc = 6.0 * dk.maxCoeff();
+  const int n0 = int(kc / dk.x()), n1 = int(kc / dk.y()), n2 = int(kc / dk.z());
+  double lattice = 0.0;
+  for (int i = -n0; i <= n0; ++i)
+    for (int j = -n1; j <= n1; ++j)
+      for (int l = -n2; l <= n2; ++l) {
+        const double k2 = std::pow(i * dk.x(), 2) + std::pow(j * dk.y(), 2) + std::pow(l * dk.z(), 2);
+        if (k2 > 0.0 && k2 < kc * kc) lattice += f(k2);
+      }
+  const double tail = integrate([&](double k) { return 4.0 * kPi * k * k * f(k * k); }, kc, kc + 40.0 / a, 16);
+  return rho / V * lattice + rho / std::pow(2.0 * kPi, 3) * tail;
 }
 
 double pme_real_error2(double cutoff_gap, double xi, double ai, double aj, double rho, Moments m) {
@@ -398,7 +425,9 @@ PmeParameters search(double tol, const Lattice& lattice, int n, double a_min, do
   const double cap = 0.5 * lmin * (1.0 - 1e-12) - 2.0 * a_max;
   if (!(cap > 0.0)) throw std::invalid_argument("pme_parameters: box smaller than four radii");
   const double rho = std::max(n, 1) / lattice.volume;
-  const double S2 = opt.self_scale2 > 0.0 ? opt.self_scale2 : pme_self_scale2(a_max, m);
+  // The size of (M x)_i: the self part and the pairs' (pme_parameters.hpp).
+  const double S2 = (opt.self_scale2 > 0.0 ? opt.self_scale2 : pme_self_scale2(a_max, m)) +
+                    pme_pair_scale2(box, a_max, rho, m);
   const double budget = std::pow(kSafety * tol, 2) * S2 / 3.0;  // per part, in e^2
   const CostConstants cc = cost_constants(m);
   // Set-up per product (0 when the caller prices the product alone).

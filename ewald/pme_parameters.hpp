@@ -5,8 +5,12 @@
 // Error model. For a random input x (unit variance per component) and particles at random
 // positions of number density rho, the error of one output particle of y = M x has mean square
 // e^2 = sum_j ||dM_ij||_F^2, where dM is what each approximation leaves out; it is compared with
-// S^2 = sum_c (self mobility of component c)^2 (the size of (M x)_i), radius a_max (largest
-// particle: the slowest self terms and the largest Faxen factors). With ||.||_F the Frobenius norm:
+// the mean square of (M x)_i itself, S^2 = S_self^2 + S_pair^2: S_self^2 = sum_c (self mobility of
+// component c)^2 (the operator passes the mean over its particles; else that of radius a_max), and
+// S_pair^2 = sum_{j != i} ||M_ij||_F^2 = (rho / V) sum_{k != 0} 2 alpha_full(k)^2 / k^4 (pme_pair_scale2:
+// alpha below with the full Faxen functions j0(ka) and 3 j1(ka) / (ka); the lattice sum for the long
+// waves, which make it grow with the box, the continuum beyond; radius a_max). With ||.||_F the
+// Frobenius norm:
 //   real space (pairs beyond the cutoff r_c = cutoff_gap + a_i + a_j; the largest of the radius
 //   pairs (a_min, a_min), (a_min, a_max), (a_max, a_max)):
 //     e_R^2 = rho int_{r_c}^inf 4 pi r^2 ||B_real(r)||_F^2 dr               (blocks of ewald_split.hpp)
@@ -65,7 +69,7 @@ struct PmeParameters {
   double shape = 1.0;           // Kaiser-Bessel beta, or Gaussian standard deviation [grid spacings]
   double k_max = 1.0;           // radius of the sphere of wave vectors resolved by the grid [1/a]
   bool sheared = false;         // chosen for every strain (Lees-Edwards)
-  // Model estimates (relative to S, see above) and the modelled cost [s] per product.
+  // Model estimates (relative to S, the rms of (M x)_i, see above) and the modelled cost [s] per product.
   double est_real = 0, est_wave = 0, est_alias = 0, est_cost = 0;
   double est_setup = 0;  // modelled set-up of one configuration [s] (counted in est_cost / products_per_update)
   // Memory allowed for the real-space scalar cache [bytes] (real_space.hpp): the model prices the
@@ -108,5 +112,8 @@ double pme_wave_error2(double k_in, double xi, double a, double rho, Moments m);
 double pme_alias_error2(const std::array<int, 3>& M, const Vec3& lengths, const Window1D& w, double xi, double a,
                         double rho, Moments m);
 double pme_self_scale2(double a, Moments m);
+// S_pair^2 (above): mean square of the pairs' part of (M x)_i for unit-variance x and random positions
+// in a box of these side lengths.
+double pme_pair_scale2(const Vec3& box, double a, double rho, Moments m);
 
 }  // namespace stokesian::ewald
