@@ -115,7 +115,8 @@ double pme_self_scale2(double a, Moments m) {
 double pme_pair_scale2(const Vec3& box, double a, double rho, Moments m) {
   // (rho / V) sum_{k != 0} 2 alpha(k)^2 / k^4 with the full Faxen functions, j0(ka) (force kind) and
   // 3 j1(ka) / (ka) (torque kind), in place of their truncations: the lattice sum for |k| < k_c, the
-  // continuum rho / (2 pi)^3 int 4 pi k^2 (...) dk beyond.
+  // continuum rho / (2 pi)^3 int 4 pi k^2 (...) dk beyond, k_c = 6 times the smallest reciprocal
+  // spacing (at most 13 modes per axis; the sphere lies inside that block of modes).
   auto f = [&](double k2) {
     const double k = std::sqrt(k2), x = k * a;
     const double gf = x < 1e-4 ? 1.0 - x * x / 6.0 : std::sin(x) / x;
@@ -127,7 +128,7 @@ double pme_pair_scale2(const Vec3& box, double a, double rho, Moments m) {
   };
   const double V = box.x() * box.y() * box.z();
   const Vec3 dk(2.0 * kPi / box.x(), 2.0 * kPi / box.y(), 2.0 * kPi / box.z());
-  const double kc = 6.0 * dk.maxCoeff();
+  const double kc = 6.0 * dk.minCoeff();
   const int n0 = int(kc / dk.x()), n1 = int(kc / dk.y()), n2 = int(kc / dk.z());
   double lattice = 0.0;
   for (int i = -n0; i <= n0; ++i)
