@@ -452,9 +452,29 @@ PmeParameters search(double tol, const Lattice& lattice, int n, double a_min, do
   if (opt.neighbours > 0.0) neighbours = {opt.neighbours};
   else
     for (double nb = 4.0; nb <= 600.0; nb *= 1.4) neighbours.push_back(nb);
-  std::vector<double> sigmas;
-  if (opt.sigma > 0.0) sigmas = {opt.sigma};
-  else sigmas = {1.0, 1.1, 1.2, 1.35, 1.5, 1.75, 2.0};
+  // Candidate grids for resolving k_in: with a fixed sigma every axis gets the smallest FFT size
+  // above sigma k_in L_d / pi. Otherwise every FFT size of every axis between sigma = 1 and 2 gives a
+  // candidate sigma, so that axes of different lengths (a sheared a_2 is up to 12 % longer) are not
+  // all rounded up together: a 1e5-sphere sheared cube got 128 x 144 x 128 from a list of seven
+  // sigmas where 120 x 144 x 120 meets the tolerance.
+  auto grid_candidates = [&](double k_in) {
+    std::vector<std::array<int, 3>> grids;
+    std::vector<double> sigmas;
+    if (opt.sigma > 0.0) sigmas = {opt.sigma};
+    else
+      for (int d = 0; d < 3; ++d) {
+        const double need = k_in * len[d] / kPi;  // grid points at sigma = 1
+        for (int M = fft_size(int(std::ceil(need))); M <= 2.0 * need; M = fft_size(M + 1)) sigmas.push_back(M / need);
+      }
+    std::sort(sigmas.begin(), sigmas.end());
+    for (double sigma : sigmas) {
+      std::array<int, 3> M;
+      // The relative margin keeps an axis whose size defined sigma from rounding up a size.
+      for (int d = 0; d < 3; ++d) M[d] = fft_size(int(std::ceil(sigma * k_in * len[d] / kPi * (1.0 - 1e-12))));
+      if (grids.empty() || grids.back() != M) grids.push_back(M);
+    }
+    return grids;
+  };
 
   double best_cost = std::numeric_limits<double>::infinity();
   double last_gap = -1.0;
@@ -480,9 +500,7 @@ PmeParameters search(double tol, const Lattice& lattice, int n, double a_min, do
     }
     const double k_in = khi;
     const double pairs = 0.5 * n * std::min(double(n - 1), rho * 4.0 / 3.0 * kPi * std::pow(gap + 2.0 * a_max, 3));
-    for (double sigma : sigmas) {
-      std::array<int, 3> M;
-      for (int d = 0; d < 3; ++d) M[d] = fft_size(int(std::ceil(sigma * k_in * len[d] / kPi)));
+    for (const std::array<int, 3>& M : grid_candidates(k_in)) {
       const double G = double(M[0]) * M[1] * M[2];
       const bool cached = RealSpaceSum::cache_bytes_for(2.0 * pairs, m) <= best.cache_bytes;
       const double setup_pairs = (kSetupParticle * n + setup_entry(m) * 2.0 * pairs) * setup_share;
@@ -504,20 +522,27 @@ PmeParameters search(double tol, const Lattice& lattice, int n, double a_min, do
         const double cost = fixed + 2.0 * cc.point * n * double(P) * P * P + kSetupWindow * n * P * setup_share;
         if (cost >= best_cost) break;
         double best_e = std::numeric_limits<double>::infinity(), best_shape = 0.0;
-        if (opt.window == WindowKind::kaiser_bessel) {
-          for (double kappa : {0.9, 1.0, 1.1, 1.2, 1.3, 1.4, 1.5}) {
-            const double beta = kappa * kPi * P * (1.0 - 0.5 / std::max(sig, 1.0));
-            const double e = alias_error2(Window1D(WindowKind::kaiser_bessel, P, beta));
-            if (e < best_e) best_e = e, best_shape = beta;
-          }
-        } else {
-          // Widths around the one whose edge value exp(-P^2 / (8 s^2)) is a decade below the
-          // tolerance; the model counts the truncation (its edge jumps) exactly.
-          const double s0 = P / (2.0 * std::sqrt(2.0 * std::log(10.0 / (kSafety * tol))));
-          for (double f : {0.6, 0.7, 0.8, 0.9, 1.0, 1.1}) {
-            const double e = alias_error2(Window1D(WindowKind::gaussian, P, f * s0));
-            if (e < best_e) best_e = e, best_shape = f * s0;
-          }
+        // Shape: a coarse scan, then (when the best is within 4x of the budget, where the answer may
+        // change) two halvings of the step around the best.
+        auto shape_of = [&](double f) {
+          return opt.window == WindowKind::kaiser_bessel
+                     ? f * kPi * P * (1.0 - 0.5 / std::max(sig, 1.0))  // beta = kappa pi P (1 - 1 / (2 sigma))
+                     // Gaussian: widths around the one whose edge value exp(-P^2 / (8 s^2)) is a decade
+                     // below the tolerance; the model counts the truncation (its edge jumps) exactly.
+                     : f * P / (2.0 * std::sqrt(2.0 * std::log(10.0 / (kSafety * tol))));
+        };
+        double best_f = 0.0;
+        auto try_shape = [&](double f) {
+          const double shape = shape_of(f);
+          const double e = alias_error2(Window1D(opt.window, P, shape));
+          if (e < best_e) best_e = e, best_shape = shape, best_f = f;
+        };
+        const bool kb = opt.window == WindowKind::kaiser_bessel;
+        for (int i = 0; i < (kb ? 7 : 6); ++i) try_shape((kb ? 0.9 : 0.6) + 0.1 * i);
+        for (double step = 0.05; step > 0.02 && best_e > budget && best_e < 4.0 * budget; step *= 0.5) {
+          const double f0 = best_f;
+          try_shape(f0 - step);
+          try_shape(f0 + step);
         }
         if (best_e > budget) continue;
         best_cost = cost;
