@@ -45,7 +45,7 @@ void FourierKernel::build(const GridGeometry& g, const Lattice& lattice, double 
   }
 }
 
-void FourierKernel::apply(std::complex<double>* fields, long stride) const {
+void FourierKernel::apply(std::complex<double>* fields, long stride, long plane) const {
   using C = std::complex<double>;
   const int M0 = M_[0], M1 = M_[1], H2 = M_[2] / 2 + 1;
   C* f0 = fields;
@@ -57,16 +57,16 @@ void FourierKernel::apply(std::complex<double>* fields, long stride) const {
     for (int i1 = 0; i1 < M1; ++i1) {
       const int n1 = i1 <= M1 / 2 ? i1 : i1 - M1;
       const Vec3 k01 = B_.col(0) * n0 + B_.col(1) * n1;
-      const long base = (long(i0) * M1 + i1) * H2;
+      const long base = (long(i0) * M1 + i1) * H2, at = long(i0) * plane + long(i1) * H2;
       for (int i2 = 0; i2 < H2; ++i2) {
-        const long t = base + i2;
+        const long t = base + i2, u = at + i2;
         const Vec3 k = k01 + B_.col(2) * double(i2);
-        const C a = f0[t], b = f1[t], c = f2[t];
+        const C a = f0[u], b = f1[u], c = f2[u];
         const C kf = k.x() * a + k.y() * b + k.z() * c;
         const double s = s1_[t], q = s2_[t];
-        f0[t] = s * a - q * k.x() * kf;
-        f1[t] = s * b - q * k.y() * kf;
-        f2[t] = s * c - q * k.z() * kf;
+        f0[u] = s * a - q * k.x() * kf;
+        f1[u] = s * b - q * k.y() * kf;
+        f2[u] = s * c - q * k.z() * kf;
       }
     }
   }

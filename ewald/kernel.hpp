@@ -22,8 +22,9 @@ namespace stokesian::ewald {
 class FourierKernel {
  public:
   void build(const GridGeometry& g, const Lattice& lattice, double xi, double mu);
-  // fields: 3 arrays of M0 * M1 * (M2/2 + 1) complex values (FFTW r2c layout), field c at fields + c * stride.
-  void apply(std::complex<double>* fields, long stride) const;
+  // fields: 3 arrays of M0 planes of M1 * (M2/2 + 1) complex values (FFTW r2c layout), plane i0 of
+  // field c at fields + c * stride + i0 * plane (plane >= M1 * (M2/2 + 1): padded planes allowed).
+  void apply(std::complex<double>* fields, long stride, long plane) const;
 
  private:
   std::array<int, 3> M_{};
