@@ -27,7 +27,7 @@ std::vector<int> level_indices(Moments m) {
 }
 }  // namespace
 
-NearField::NearField(Moments m, double mu, NearFieldParams p) : m_(m), mu_(mu), p_(p) {
+NearField::NearField(Moments m, double mu, NearFieldParams p) : m_(m), mu_(mu), p_(p), far_inverse_(m) {
   if (!(p.cutoff > 2.0) || !(p.taper >= 0.0) || !(p.cutoff - p.taper >= 2.0) || !(p.min_gap > 0.0))
     throw std::invalid_argument("NearField: need cutoff > 2, 0 <= taper <= cutoff - 2, min_gap > 0");
   const SqueezeParams& q = p.squeeze;
@@ -67,6 +67,29 @@ MatX NearField::exact_pair(const Vec3& r_vec, double ai, double aj) const {
 }
 
 MatX NearField::pair_block(const Vec3& r_vec_in, double ai, double aj) const {
+  if (p_.model == Lubrication::squeeze) return pair_block_reference(r_vec_in, ai, aj);
+  // Regularised gap: evaluate at xi >= min_gap along the line of centres.
+  const double r = r_vec_in.norm(), half = 0.5 * (ai + aj);
+  const double xi = r / half - 2.0;
+  const Vec3 dir = r > 0 ? Vec3(r_vec_in / r) : Vec3::UnitZ();
+  const Vec3 r_vec = xi < p_.min_gap ? Vec3(dir * half * (2.0 + p_.min_gap)) : r_vec_in;
+  const double rn = r_vec.norm();
+  ResistanceScalars s12, s21, f12, f21;
+  tables_.pair_scalars(rn, ai, aj, s12, s21);
+  far_inverse_.scalars(rn, ai, aj, mu_, f12, f21);
+  for (int k = 0; k < kNumScalars; ++k) {
+    scalar_at(s12, k) -= scalar_at(f12, k);
+    scalar_at(s21, k) -= scalar_at(f21, k);
+  }
+  const PairMatrix R = two_sphere_resistance(r_vec, ai, aj, mu_, s12, s21);
+  const auto idx = level_indices(m_);
+  MatX out(idx.size(), idx.size());
+  for (std::size_t p = 0; p < idx.size(); ++p)
+    for (std::size_t q = 0; q < idx.size(); ++q) out(long(p), long(q)) = R(idx[p], idx[q]);
+  return out;
+}
+
+MatX NearField::pair_block_reference(const Vec3& r_vec_in, double ai, double aj) const {
   const int d = dof_per_particle(m_);
   if (p_.model == Lubrication::squeeze) {
     // c g g^T with w = g.v the normal velocity of j relative to i (squeeze.hpp): in the generalised

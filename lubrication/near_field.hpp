@@ -22,6 +22,7 @@
 #include "engine/core/types.hpp"
 #include "lubrication/cholmod_factor.hpp"
 #include "lubrication/cutoff.hpp"
+#include "lubrication/far_pair_inverse.hpp"
 #include "lubrication/resistance_table.hpp"
 #include "lubrication/squeeze.hpp"
 
@@ -65,8 +66,12 @@ class NearField {
   MatX assemble_dense(const std::vector<Vec3>& x, const std::vector<double>& a) const;
 
   // The 2d x 2d pair block R2B_exact - R2B_inf (squeeze level: the squeeze block) for sphere i at the
-  // origin and sphere j at r_vec = x_j - x_i (pair order i, j), without the switch w(s).
+  // origin and sphere j at r_vec = x_j - x_i (pair order i, j), without the switch w(s). R2B_inf
+  // comes as two-sphere scalars (far_pair_inverse.hpp), subtracted from the exact ones before the
+  // one tensor assembly.
   MatX pair_block(const Vec3& r_vec, double ai, double aj) const;
+  // Reference twin: R2B_inf by inverting the 2d x 2d two-body far-field mobility in the global frame.
+  MatX pair_block_reference(const Vec3& r_vec, double ai, double aj) const;
   // The switch w(s) of this near field at symmetric separation s = 2 r / (a_i + a_j).
   double weight(double s) const { return cutoff_weight(s, p_.band()); }
   // The exact two-sphere resistance at the solve's moment level (2d x 2d).
@@ -102,6 +107,7 @@ class NearField {
   double mu_;
   NearFieldParams p_;
   mutable ResistanceTableCache tables_;
+  FarPairInverse far_inverse_;
 };
 
 }  // namespace stokesian::lubrication
