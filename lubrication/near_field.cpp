@@ -178,7 +178,14 @@ SparseMatrix NearField::assemble(const std::vector<Vec3>& x, const std::vector<d
       }
     outer[n * d] = int(at);
   }
-  std::fill(val, val + nnz, 0.0);
+  // Every off-diagonal block is written whole by its pair below (first touched there, in parallel);
+  // only the diagonal blocks, which sum their pairs' parts, start from zero.
+  for (long q = 0; q < n; ++q) {
+    const auto& r = rows[std::size_t(q)];
+    if (r.empty()) continue;
+    const long pos = long(std::lower_bound(r.begin(), r.end(), int(q)) - r.begin());
+    for (int v = 0; v < d; ++v) std::fill_n(val + outer[q * d + v] + pos * d, d, 0.0);
+  }
   // Entry (row block rq, column block q, u, v).
   auto entry = [&](int rq, int q, int u, int v) {
     const auto& r = rows[std::size_t(q)];
@@ -217,14 +224,33 @@ SparseMatrix NearField::assemble(const std::vector<Vec3>& x, const std::vector<d
       st.worst_i = p.i;
       st.worst_j = p.j;
     }
-    const double* dg = diag.data() + m * std::size_t(2 * d * d);
-    double* ii = entry(p.i, p.i, 0, 0);
-    double* jj = entry(p.j, p.j, 0, 0);
-    for (int v = 0; v < d; ++v)
-      for (int u = 0; u < d; ++u) {
-        ii[outer[p.i * d + v] - outer[p.i * d] + u] += dg[v * d + u];
-        jj[outer[p.j * d + v] - outer[p.j * d] + u] += dg[d * d + v * d + u];
-      }
+  }
+  // Diagonal blocks: each particle sums its pairs' parts in pair order (the same sums for any
+  // thread count), particles in parallel. Incidences (pair m, side) per particle, m ascending.
+  std::vector<long> first(std::size_t(n) + 1, 0);
+  for (std::size_t m = 0; m < in.size(); ++m) {
+    ++first[std::size_t(pairs[in[m]].i) + 1];
+    ++first[std::size_t(pairs[in[m]].j) + 1];
+  }
+  for (long q = 0; q < n; ++q) first[std::size_t(q) + 1] += first[std::size_t(q)];
+  std::vector<long> incidence(static_cast<std::size_t>(first.back()));
+  {
+    std::vector<long> fill(first.begin(), first.end() - 1);
+    for (std::size_t m = 0; m < in.size(); ++m) {
+      incidence[std::size_t(fill[std::size_t(pairs[in[m]].i)]++)] = 2 * long(m);
+      incidence[std::size_t(fill[std::size_t(pairs[in[m]].j)]++)] = 2 * long(m) + 1;
+    }
+  }
+#pragma omp parallel for schedule(dynamic, 64) if (long(in.size()) >= parallel::kNearFieldPairs)
+  for (long q = 0; q < n; ++q) {
+    if (first[std::size_t(q)] == first[std::size_t(q) + 1]) continue;
+    double* qq = entry(int(q), int(q), 0, 0);
+    for (long t = first[std::size_t(q)]; t < first[std::size_t(q) + 1]; ++t) {
+      const long m = incidence[std::size_t(t)] / 2, side = incidence[std::size_t(t)] % 2;
+      const double* dg = diag.data() + std::size_t(m) * std::size_t(2 * d * d) + std::size_t(side * d * d);
+      for (int v = 0; v < d; ++v)
+        for (int u = 0; u < d; ++u) qq[outer[q * d + v] - outer[q * d] + u] += dg[v * d + u];
+    }
   }
   if (stats) *stats = st;
   return R;

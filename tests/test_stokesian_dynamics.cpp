@@ -6,7 +6,12 @@
 #include "engine/sd_dense.hpp"
 #include "lubrication/near_field.hpp"
 
+#include "engine/core/parallel.hpp"
+
 #include <Eigen/Eigenvalues>
+#include <omp.h>
+
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -113,6 +118,40 @@ TEST_CASE("near-field pair block from two-sphere scalars equals its reference tw
         }
   }
   MESSAGE("largest relative difference " << worst);
+}
+
+TEST_CASE("sparse near-field assembly is bitwise independent of the thread count") {
+  // Pair blocks in parallel, diagonal blocks summed per particle in pair order (near_field.cpp).
+  std::mt19937_64 rng(23);
+  std::uniform_real_distribution<double> u(0, 1);
+  std::vector<Vec3> x;
+  std::vector<double> a;
+  while (x.size() < 120) {
+    const Vec3 p(10 * u(rng), 10 * u(rng), 10 * u(rng));
+    const double ai = 0.5 + 0.7 * u(rng);
+    bool ok = true;
+    for (std::size_t k = 0; k < x.size(); ++k) ok &= (p - x[k]).norm() > ai + a[k] + 1e-3;
+    if (ok) {
+      x.push_back(p);
+      a.push_back(ai);
+    }
+  }
+  const Domain box = Domain::periodic_box(Vec3(10, 10, 10));
+  for (Moments m : {Moments::F, Moments::FTS}) {
+    const lubrication::NearField nf(m, 1.0);
+    const int before = omp_get_max_threads();
+    omp_set_num_threads(1);
+    lubrication::NearFieldStats s1, s2;
+    const lubrication::SparseMatrix one = nf.assemble(x, a, box, &s1);
+    omp_set_num_threads(2);
+    const lubrication::SparseMatrix two = nf.assemble(x, a, box, &s2);
+    omp_set_num_threads(before);
+    CHECK(s1.pairs > parallel::kNearFieldPairs);
+    CHECK(s1.pairs == s2.pairs);
+    REQUIRE(one.nonZeros() == two.nonZeros());
+    CHECK(std::equal(one.valuePtr(), one.valuePtr() + one.nonZeros(), two.valuePtr()));
+    CHECK(std::equal(one.innerIndexPtr(), one.innerIndexPtr() + one.nonZeros(), two.innerIndexPtr()));
+  }
 }
 
 TEST_CASE("unequal-sphere pair resistance of SD is symmetric positive definite down to the minimum gap") {
