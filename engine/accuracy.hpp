@@ -19,6 +19,9 @@ namespace stokesian {
 // The accelerated SD Krylov residual as a fraction of the tolerance (measured: engine/accuracy.cpp);
 // the solver also uses it to recover the tolerance from its residual (engine/sd_accelerated.cpp).
 inline constexpr double kKrylovFactor = 0.02;
+// The same for scenes without held particles, whose residual maps onto the error without the held
+// block's amplification (measured: engine/accuracy.cpp).
+inline constexpr double kFreeKrylovFactor = 0.1;
 
 struct AccuracyKnobs {
   double far_field = 1e-6;  // relative accuracy asked of far-field products (MobilitySpec::tolerance)
