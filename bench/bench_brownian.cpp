@@ -19,7 +19,8 @@
 //                  cost per step of `stokesian run`, without output), same configuration
 // Far-field products per Brownian step = lanczos_iterations + products of both solves.
 // Usage: bench_brownian [--quick] [--out DIR]; BENCH_MAX_N caps the sizes (default 10000 full,
-// 1000 quick), BENCH_MIN_N skips smaller sizes, BENCH_STEPS the steps per size (default 2, quick 1),
+// 1000 quick), BENCH_MIN_N skips smaller sizes, BENCH_STEPS the steps per size (default 2, quick 1)
+// after BENCH_WARMUP untimed ones (default 1, quick 0; see measure()),
 // BENCH_TOL the tolerance (1e-3), BENCH_THREADS one thread count, BENCH_NAME the results name,
 // BENCH_NO_ENGINE skips the engine step (large N: one step, parts only).
 // Rows: N, phi, threads, tolerance; phases: seconds per step (means over the steps), products.
@@ -72,6 +73,7 @@ struct StepCost {
   double setup_far = 0, setup_near = 0, setup_factor = 0, setup = 0;
   double far_noise = 0, near_noise = 0, noise = 0;
   double solve = 0, drift_setup = 0, drift_solve = 0, drift = 0, start_solve = 0;
+  double drift_far = 0, drift_near = 0, drift_factor = 0;  // the midpoint prepare's parts
   double lanczos = 0, products_solve = 0, products_drift = 0, products_start = 0;
   double engine_step = 0;
   double cpu_step = 0, cpu_engine_step = 0;  // CPU seconds of the Fixman step parts / engine step
@@ -87,8 +89,10 @@ double radius_ratio(const std::vector<double>& a) {
   return *hi / *lo;
 }
 
-// Mean cost of `steps` Fixman steps from the scene's initial state, parts timed separately.
-StepCost measure(const Scene& scene, int steps) {
+// Mean cost of `steps` Fixman steps after `warmup` untimed ones from the scene's initial state, parts
+// timed separately. The first step of a sheared scene builds the sheared PME (its box starts at
+// strain 0 with unsheared parameters): a one-off of a run, not a step's cost.
+StepCost measure(const Scene& scene, int steps, int warmup) {
   Simulation sim(scene);
   const ResolvedModel& model = sim.model();
   Hydrodynamics hyd(model, scene.fluid.viscosity, ambient_flow(scene.flow), scene.hydro.tolerance,
@@ -99,7 +103,8 @@ StepCost measure(const Scene& scene, int steps) {
   const std::size_t n = s.position.size();
   const std::vector<Vec3> zero(n, Vec3::Zero());
   StepCost mean;
-  for (int k = 0; k < steps; ++k) {
+  for (int k = 0; k < warmup + steps; ++k) {
+    const bool timed = k >= warmup;
     StepCost c;
     const double dt = s.dt;
     const Configuration c0{s.position, s.radius, s.domain};
@@ -135,6 +140,9 @@ StepCost measure(const Scene& scene, int steps) {
     t = now();
     hyd.prepare(cm);
     c.drift_setup = now() - t;
+    c.drift_far = sd.stats().seconds_far_field_setup;
+    c.drift_near = sd.stats().seconds_near_field_assembly;
+    c.drift_factor = sd.stats().seconds_factorisation;
     t = now();
     hyd.solve(cm, s.fixed, zero, zero, &xi, &warm);
     c.drift_solve = now() - t;
@@ -143,6 +151,7 @@ StepCost measure(const Scene& scene, int steps) {
     c.cpu_step = cpu_now() - cpu - cpu_start;
     // The same step through the engine (also moves s on); BENCH_NO_ENGINE: skipped (0 recorded).
     if (std::getenv("BENCH_NO_ENGINE")) {
+      if (!timed) continue;  // warm-up: s does not move on
       mean.add(c, 1.0 / steps);
       break;  // one step only: s does not move on
     }
@@ -152,14 +161,15 @@ StepCost measure(const Scene& scene, int steps) {
     sim.advance(s, ev);
     c.engine_step = now() - t;
     c.cpu_engine_step = cpu_now() - cpu;
-    std::printf("  step %d: setup %.3f (far %.3f near %.3f factor %.3f) noise far %.3f near %.3f (lanczos %.0f) "
-                "solve %.3f (%.0f products) drift %.3f (prepare %.3f, solve %.3f, %.0f products) start solve %.3f "
+    std::printf("  %s %d: setup %.3f (far %.3f near %.3f factor %.3f) noise far %.3f near %.3f (lanczos %.0f) "
+                "solve %.3f (%.0f products) drift %.3f (prepare %.3f [far %.3f near %.3f factor %.3f], solve %.3f, %.0f products) start solve %.3f "
                 "(%.0f) | engine step %.3f s | CPU: step %.3f s, engine step %.3f s\n",
-                k, c.setup, c.setup_far, c.setup_near, c.setup_factor, c.far_noise, c.near_noise, c.lanczos, c.solve,
-                c.products_solve, c.drift, c.drift_setup, c.drift_solve, c.products_drift, c.start_solve,
+                timed ? "step" : "warm-up step", k, c.setup, c.setup_far, c.setup_near, c.setup_factor, c.far_noise, c.near_noise, c.lanczos, c.solve,
+                c.products_solve, c.drift, c.drift_setup, c.drift_far, c.drift_near, c.drift_factor, c.drift_solve,
+                c.products_drift, c.start_solve,
                 c.products_start, c.engine_step, c.cpu_step, c.cpu_engine_step);
     std::fflush(stdout);
-    mean.add(c, 1.0 / steps);
+    if (timed) mean.add(c, 1.0 / steps);
   }
   return mean;
 }
@@ -174,6 +184,8 @@ int main(int argc, char** argv) {
   if (const char* e = std::getenv("BENCH_MIN_N")) min_n = std::atol(e);
   int steps = opt.quick ? 1 : 2;
   if (const char* e = std::getenv("BENCH_STEPS")) steps = std::max(1, std::atoi(e));
+  int warmup = opt.quick ? 0 : 1;
+  if (const char* e = std::getenv("BENCH_WARMUP")) warmup = std::max(0, std::atoi(e));
   double tol = 1e-3;
   if (const char* e = std::getenv("BENCH_TOL")) tol = std::atof(e);
   const double phi = 0.4;
@@ -191,7 +203,7 @@ int main(int argc, char** argv) {
     std::printf("N %ld phi %.2f: placement %.1f s\n", n, phi, now() - t);
     for (int threads : thread_counts) {
       omp_set_num_threads(threads);
-      const StepCost c = measure(scene, steps);
+      const StepCost c = measure(scene, steps, warmup);
       double load = -1;  // one-minute load average after the measurement (noisy machine: see docs)
       if (FILE* f = std::fopen("/proc/loadavg", "r")) {
         if (std::fscanf(f, "%lf", &load) != 1) load = -1;
@@ -206,7 +218,7 @@ int main(int argc, char** argv) {
                   c.products_solve, c.products_drift, c.start_solve, c.products_start, c.engine_step, c.cpu_step,
                   c.cpu_engine_step);
       std::fflush(stdout);
-      res.add({{"N", double(n)}, {"phi", phi}, {"threads", double(threads)}, {"tolerance", tol}, {"steps", double(steps)}},
+      res.add({{"N", double(n)}, {"phi", phi}, {"threads", double(threads)}, {"tolerance", tol}, {"steps", double(steps)}, {"warmup", double(warmup)}},
               {{"step", step},
                {"setup", c.setup},
                {"setup_far_field", c.setup_far},
@@ -218,6 +230,9 @@ int main(int argc, char** argv) {
                {"solve", c.solve},
                {"drift", c.drift},
                {"drift_setup", c.drift_setup},
+               {"drift_setup_far_field", c.drift_far},
+               {"drift_setup_near_field", c.drift_near},
+               {"drift_setup_factorisation", c.drift_factor},
                {"drift_solve", c.drift_solve},
                {"start_solve", c.start_solve},
                {"engine_step", c.engine_step},

@@ -58,9 +58,10 @@ void PmeFarField::set_configuration(const Configuration& c) {
     update_positions(c.x);
     return;
   }
-  // Only the strain moved and the parameters hold for every strain: new lattice, same grid and plans.
+  // Only the strain moved and the parameters hold for every strain (zero included): new lattice, same
+  // grid and plans. An operator built unsheared is rebuilt once when the box first shears.
   if (fft_ && radius_ == c.a && p_.sheared && c.domain.periodic() && c.domain.box == domain_.box &&
-      c.domain.shear_strain != 0.0 && long(c.x.size()) == n_) {
+      long(c.x.size()) == n_) {
     domain_ = c.domain;
     set_lattice();
     set_windows(c.x);

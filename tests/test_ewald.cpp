@@ -742,6 +742,14 @@ TEST_CASE("PME under shear: a new strain keeps the parameters and FFT plans and 
   // The unsheared box gets its own (smaller or equal) grid.
   const ewald::PmeFarField still(c.x, c.a, 1.0, Moments::FTS, box(L, 0.0), 1e-5);
   for (int d = 0; d < 3; ++d) CHECK(still.parameters().grid[d] <= before.grid[d]);
+  // Back at strain 0 the sheared operator keeps its grid (the parameters hold at every strain) and
+  // agrees with the unsheared one to the tolerance (each is within 1e-5 of the exact product).
+  moving.set_configuration(Configuration{c.x, c.a, box(L, 0.0)});
+  CHECK(moving.parameters().grid == before.grid);
+  VecX y2, y3;
+  moving.apply(x, y2);
+  still.apply(x, y3);
+  CHECK((y2 - y3).norm() <= 2e-5 * y3.norm());
 }
 
 TEST_CASE("PME at N = 1e4: achieved error below the request (F and FTS, phi = 0.1, tol 1e-4)") {
