@@ -13,10 +13,11 @@
 //   drift          prepare(x') + solve at the midpoint x' (the extra work of the drift), warm-started
 //                  from the iterate of the solve at x0 as the Fixman step does
 // plus, beside the step:
-//   start_solve    the deterministic solve at x0 that Simulation::run evaluates before each
-//                  advance (frames, overlaps); the Fixman step does not use its velocities
-//   engine_step    wall time of sim.evaluate(x0) + sim.advance() through the Simulation (the
-//                  cost per step of `stokesian run`, without output), same configuration
+//   start_solve    the deterministic solve at x0 that Simulation::run evaluates on frame steps;
+//                  the Fixman step does not use its velocities
+//   engine_step    wall time of sim.evaluate(x0) + sim.advance() through the Simulation, same
+//                  configuration; sim.evaluate always solves at x0 (engine_start_solve), which
+//                  Simulation::run skips between frames: a run's step is engine_step - engine_start_solve
 // Far-field products per Brownian step = lanczos_iterations + products of both solves.
 // Usage: bench_brownian [--quick] [--out DIR]; BENCH_MAX_N caps the sizes (default 10000 full,
 // 1000 quick), BENCH_MIN_N skips smaller sizes, BENCH_STEPS the steps per size (default 2, quick 1)
@@ -75,7 +76,8 @@ struct StepCost {
   double solve = 0, drift_setup = 0, drift_solve = 0, drift = 0, start_solve = 0;
   double drift_far = 0, drift_near = 0, drift_factor = 0;  // the midpoint prepare's parts
   double lanczos = 0, products_solve = 0, products_drift = 0, products_start = 0;
-  double engine_step = 0;
+  double engine_step = 0, engine_evaluate = 0;  // engine_evaluate: sim.evaluate(x0) of the engine step
+  double engine_start_solve = 0;                // that evaluation's solve (skipped by run between frames)
   double cpu_step = 0, cpu_engine_step = 0;  // CPU seconds of the Fixman step parts / engine step
   void add(const StepCost& o, double w) {
     double* a = &setup_far;
@@ -158,16 +160,21 @@ StepCost measure(const Scene& scene, int steps, int warmup) {
     cpu = cpu_now();
     t = now();
     const Evaluation ev = sim.evaluate(s, s.position);
+    c.engine_evaluate = now() - t;
+    // Its solve phase: Simulation::run solves at x0 only on frame steps (the Fixman step solves with
+    // F + xi itself), so a run's step costs engine_step - engine_start_solve between frames.
+    for (std::size_t q = 0; q < sim.phase_times().names.size(); ++q)
+      if (sim.phase_times().names[q] == "solve") c.engine_start_solve = sim.phase_times().seconds[q];
     sim.advance(s, ev);
     c.engine_step = now() - t;
     c.cpu_engine_step = cpu_now() - cpu;
     std::printf("  %s %d: setup %.3f (far %.3f near %.3f factor %.3f) noise far %.3f near %.3f (lanczos %.0f) "
                 "solve %.3f (%.0f products) drift %.3f (prepare %.3f [far %.3f near %.3f factor %.3f], solve %.3f, %.0f products) start solve %.3f "
-                "(%.0f) | engine step %.3f s | CPU: step %.3f s, engine step %.3f s\n",
+                "(%.0f) | engine step %.3f s (evaluate %.3f, its solve %.3f) | CPU: step %.3f s, engine step %.3f s\n",
                 timed ? "step" : "warm-up step", k, c.setup, c.setup_far, c.setup_near, c.setup_factor, c.far_noise, c.near_noise, c.lanczos, c.solve,
                 c.products_solve, c.drift, c.drift_setup, c.drift_far, c.drift_near, c.drift_factor, c.drift_solve,
                 c.products_drift, c.start_solve,
-                c.products_start, c.engine_step, c.cpu_step, c.cpu_engine_step);
+                c.products_start, c.engine_step, c.engine_evaluate, c.engine_start_solve, c.cpu_step, c.cpu_engine_step);
     std::fflush(stdout);
     if (timed) mean.add(c, 1.0 / steps);
   }
@@ -229,6 +236,8 @@ int main(int argc, char** argv) {
                {"noise", c.noise},
                {"solve", c.solve},
                {"drift", c.drift},
+               {"engine_evaluate", c.engine_evaluate},
+               {"engine_start_solve", c.engine_start_solve},
                {"drift_setup", c.drift_setup},
                {"drift_setup_far_field", c.drift_far},
                {"drift_setup_near_field", c.drift_near},
