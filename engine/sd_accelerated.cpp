@@ -42,7 +42,7 @@ void AcceleratedStokesianDynamics::assemble_near_field(const Configuration& c) {
   const auto t0 = std::chrono::steady_clock::now();
   config_.store(c);
   near_stats_ = {};
-  Rnf_ = near_.assemble(c.x, c.a, c.domain, &near_stats_);
+  near_.assemble(c.x, c.a, c.domain, Rnf_, &near_stats_);
   D_ = self_resistance(c.a, mu_, m_);
   stats_.seconds_near_field_assembly = seconds_since(t0);
   if (!factored_) {  // first configuration: the entries of mobile particles' forces (no fixed particles)

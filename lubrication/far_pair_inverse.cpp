@@ -4,7 +4,6 @@
 #include "engine/kernels/mobility_pair.hpp"
 
 #include <cmath>
-#include <Eigen/LU>
 #include <stdexcept>
 
 namespace stokesian::lubrication {
@@ -25,19 +24,37 @@ Small pair_frame_mobility(double r, double a1, double a2, double mu, Moments m) 
   return M;
 }
 
-// R(g, g) = M(g, g)^{-1} for the coordinates g of one group (K = g.size(), or Dynamic).
-template <int K>
+// R(g, g) = M(g, g)^{-1} for the coordinates g of one group (at most 22): Cholesky factor L, then
+// L^{-1} by forward substitution and R = L^{-T} L^{-1}, in plain loops (Eigen's small fixed-size
+// inverses went through its blocked triangular solves, a fifth of the pair block's time).
 void invert_group(const Small& M, const std::vector<int>& g, Small& R) {
-  const long k = long(g.size());
-  using Block = Eigen::Matrix<double, K, K, Eigen::ColMajor, (K > 0 ? K : 22), (K > 0 ? K : 22)>;
-  Block B(k, k);
-  for (long i = 0; i < k; ++i)
-    for (long j = 0; j < k; ++j) B(i, j) = M(g[std::size_t(i)], g[std::size_t(j)]);
-  // Fixed sizes: Eigen's closed forms up to 4 x 4, an inlined LU at 6 x 6 (the blocked triangular
-  // solves of an LLT cost more than the rest of the pair at these sizes).
-  const Block inv = B.inverse();
-  for (long i = 0; i < k; ++i)
-    for (long j = 0; j < k; ++j) R(g[std::size_t(i)], g[std::size_t(j)]) = inv(i, j);
+  const int k = int(g.size());
+  double L[22][22], W[22][22];  // Cholesky factor (lower) and its inverse (lower)
+  for (int i = 0; i < k; ++i)
+    for (int j = 0; j <= i; ++j) {
+      double v = M(g[std::size_t(i)], g[std::size_t(j)]);
+      for (int q = 0; q < j; ++q) v -= L[i][q] * L[j][q];
+      if (i == j) {
+        if (!(v > 0.0)) throw std::runtime_error("FarPairInverse: two-body far-field mobility not positive definite");
+        L[i][i] = std::sqrt(v);
+      } else {
+        L[i][j] = v / L[j][j];
+      }
+    }
+  for (int j = 0; j < k; ++j) {
+    W[j][j] = 1.0 / L[j][j];
+    for (int i = j + 1; i < k; ++i) {
+      double v = 0.0;
+      for (int q = j; q < i; ++q) v -= L[i][q] * W[q][j];
+      W[i][j] = v / L[i][i];
+    }
+  }
+  for (int i = 0; i < k; ++i)
+    for (int j = 0; j <= i; ++j) {
+      double v = 0.0;
+      for (int q = i; q < k; ++q) v += W[q][i] * W[q][j];
+      R(g[std::size_t(i)], g[std::size_t(j)]) = R(g[std::size_t(j)], g[std::size_t(i)]) = v;
+    }
 }
 
 // Member index in ResistanceScalars of scalar type t (0..10: XA YA YB XC YC XG YG YH XM YM ZM),
@@ -117,16 +134,7 @@ void FarPairInverse::scalars(double r, double a1, double a2, double mu, Resistan
   const int d = d_;
   const Small M = pair_frame_mobility(r, a1, a2, mu, m_);
   Small R = Small::Zero(2 * d, 2 * d);
-  for (const std::vector<int>& g : groups_) {
-    switch (g.size()) {
-      case 1: invert_group<1>(M, g, R); break;
-      case 2: invert_group<2>(M, g, R); break;
-      case 3: invert_group<3>(M, g, R); break;
-      case 4: invert_group<4>(M, g, R); break;
-      case 6: invert_group<6>(M, g, R); break;
-      default: invert_group<Eigen::Dynamic>(M, g, R);
-    }
-  }
+  for (const std::vector<int>& g : groups_) invert_group(M, g, R);
   s11_12 = ResistanceScalars{};
   s22_21 = ResistanceScalars{};
   const double rad[2] = {a1, a2};

@@ -82,10 +82,11 @@ MatX NearField::pair_block(const Vec3& r_vec_in, double ai, double aj) const {
     scalar_at(s21, k) -= scalar_at(f21, k);
   }
   const PairMatrix R = two_sphere_resistance(r_vec, ai, aj, mu_, s12, s21);
-  const auto idx = level_indices(m_);
-  MatX out(idx.size(), idx.size());
-  for (std::size_t p = 0; p < idx.size(); ++p)
-    for (std::size_t q = 0; q < idx.size(); ++q) out(long(p), long(q)) = R(idx[p], idx[q]);
+  // The level's rows and columns of the FTS layout [F1 T1 S1 F2 T2 S2] (level_indices above).
+  const int d = dof_per_particle(m_);
+  MatX out(2 * d, 2 * d);
+  for (int q = 0; q < 2 * d; ++q)
+    for (int p = 0; p < 2 * d; ++p) out(p, q) = R(p < d ? p : p - d + 11, q < d ? q : q - d + 11);
   return out;
 }
 
@@ -130,15 +131,23 @@ MatX NearField::pair_block_reference(const Vec3& r_vec_in, double ai, double aj)
 
 SparseMatrix NearField::assemble(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain,
                                  NearFieldStats* stats) const {
+  SparseMatrix R;
+  assemble(x, a, domain, R, stats);
+  return R;
+}
+
+void NearField::assemble(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain,
+                         SparseMatrix& R, NearFieldStats* stats) const {
   const int d = dof_per_particle(m_);
   const double amax = *std::max_element(a.begin(), a.end());
   // exact tables for few distinct size ratios, interpolated in ln(lambda) otherwise
   if (p_.model == Lubrication::exact) tables_.prepare_radii(a);
   const auto pairs = trees::neighbor_pairs(x, a, domain, (p_.cutoff - 2.0) * amax);
   // The sparse pattern first (block column j: row blocks j and its partners, ascending), then the
-  // pair blocks in parallel: off-diagonal blocks straight into their own places, the two diagonal
-  // parts into a buffer that is summed serially in pair order (deterministic for any thread
-  // count). No triplet list: the peak memory is the matrix plus 2 d^2 doubles per pair.
+  // pair blocks in parallel, a chunk of pairs at a time: off-diagonal blocks straight into their own
+  // places, the two diagonal parts into a chunk buffer whose parts each particle then adds in pair
+  // order (the same sums for any thread count). No triplet list: the peak memory is the matrix plus
+  // 2 d^2 doubles per pair of one chunk.
   const long n = long(x.size());
   std::vector<std::size_t> in;  // pairs with a non-zero weight, in pair order
   std::vector<double> wt;
@@ -161,10 +170,10 @@ SparseMatrix NearField::assemble(const std::vector<Vec3>& x, const std::vector<d
     r.push_back(int(q));
     std::sort(r.begin(), r.end());
   }
-  SparseMatrix R(n * d, n * d);
   long nnz = 0;
   for (const auto& r : rows) nnz += long(r.size()) * d * d;
-  R.resizeNonZeros(nnz);
+  if (R.rows() != n * d || R.cols() != n * d || !R.isCompressed()) R = SparseMatrix(n * d, n * d);
+  R.resizeNonZeros(nnz);  // keeps the storage when it is large enough
   int* outer = R.outerIndexPtr();
   int* inner = R.innerIndexPtr();
   double* val = R.valuePtr();
@@ -178,7 +187,7 @@ SparseMatrix NearField::assemble(const std::vector<Vec3>& x, const std::vector<d
       }
     outer[n * d] = int(at);
   }
-  // Every off-diagonal block is written whole by its pair below (first touched there, in parallel);
+  // Every off-diagonal block is written whole by its pair below;
   // only the diagonal blocks, which sum their pairs' parts, start from zero.
   for (long q = 0; q < n; ++q) {
     const auto& r = rows[std::size_t(q)];
@@ -192,24 +201,6 @@ SparseMatrix NearField::assemble(const std::vector<Vec3>& x, const std::vector<d
     const long pos = long(std::lower_bound(r.begin(), r.end(), rq) - r.begin());
     return val + outer[q * d + v] + pos * d + u;
   };
-  std::vector<double> diag(in.size() * std::size_t(2 * d * d));
-#pragma omp parallel for schedule(dynamic, 8) if (long(in.size()) >= parallel::kNearFieldPairs)
-  for (long m = 0; m < long(in.size()); ++m) {
-    const auto& p = pairs[in[std::size_t(m)]];
-    const double ai = a[std::size_t(p.i)], aj = a[std::size_t(p.j)];
-    MatX B = pair_block(-p.r, ai, aj);  // r_vec = x_j - x_i
-    if (wt[std::size_t(m)] < 1.0) B *= wt[std::size_t(m)];
-    double* ij = entry(p.i, p.j, 0, 0);
-    double* ji = entry(p.j, p.i, 0, 0);
-    double* dg = diag.data() + std::size_t(m) * std::size_t(2 * d * d);
-    for (int v = 0; v < d; ++v)
-      for (int u = 0; u < d; ++u) {
-        ij[outer[p.j * d + v] - outer[p.j * d] + u] = B(u, d + v);
-        ji[outer[p.i * d + v] - outer[p.i * d] + u] = B(d + u, v);
-        dg[v * d + u] = B(u, v);
-        dg[d * d + v * d + u] = B(d + u, d + v);
-      }
-  }
   NearFieldStats st;
   for (std::size_t m = 0; m < in.size(); ++m) {
     const auto& p = pairs[in[m]];
@@ -225,8 +216,8 @@ SparseMatrix NearField::assemble(const std::vector<Vec3>& x, const std::vector<d
       st.worst_j = p.j;
     }
   }
-  // Diagonal blocks: each particle sums its pairs' parts in pair order (the same sums for any
-  // thread count), particles in parallel. Incidences (pair m, side) per particle, m ascending.
+  // Incidences (pair m, side) per particle, m ascending: each particle's diagonal block adds its
+  // pairs' parts in this order.
   std::vector<long> first(std::size_t(n) + 1, 0);
   for (std::size_t m = 0; m < in.size(); ++m) {
     ++first[std::size_t(pairs[in[m]].i) + 1];
@@ -234,26 +225,48 @@ SparseMatrix NearField::assemble(const std::vector<Vec3>& x, const std::vector<d
   }
   for (long q = 0; q < n; ++q) first[std::size_t(q) + 1] += first[std::size_t(q)];
   std::vector<long> incidence(static_cast<std::size_t>(first.back()));
-  {
-    std::vector<long> fill(first.begin(), first.end() - 1);
-    for (std::size_t m = 0; m < in.size(); ++m) {
-      incidence[std::size_t(fill[std::size_t(pairs[in[m]].i)]++)] = 2 * long(m);
-      incidence[std::size_t(fill[std::size_t(pairs[in[m]].j)]++)] = 2 * long(m) + 1;
-    }
+  std::vector<long> cursor(first.begin(), first.end() - 1);
+  for (std::size_t m = 0; m < in.size(); ++m) {
+    incidence[std::size_t(cursor[std::size_t(pairs[in[m]].i)]++)] = 2 * long(m);
+    incidence[std::size_t(cursor[std::size_t(pairs[in[m]].j)]++)] = 2 * long(m) + 1;
   }
-#pragma omp parallel for schedule(dynamic, 64) if (long(in.size()) >= parallel::kNearFieldPairs)
-  for (long q = 0; q < n; ++q) {
-    if (first[std::size_t(q)] == first[std::size_t(q) + 1]) continue;
-    double* qq = entry(int(q), int(q), 0, 0);
-    for (long t = first[std::size_t(q)]; t < first[std::size_t(q) + 1]; ++t) {
-      const long m = incidence[std::size_t(t)] / 2, side = incidence[std::size_t(t)] % 2;
-      const double* dg = diag.data() + std::size_t(m) * std::size_t(2 * d * d) + std::size_t(side * d * d);
+  std::copy(first.begin(), first.end() - 1, cursor.begin());  // per particle: next incidence to add
+  const long chunk = 16384;
+  const bool parallel = long(in.size()) >= parallel::kNearFieldPairs;
+  std::vector<double> diag(std::size_t(std::min<long>(chunk, long(in.size()))) * std::size_t(2 * d * d));
+  for (long m0 = 0; m0 < long(in.size()); m0 += chunk) {
+    const long m1 = std::min<long>(m0 + chunk, long(in.size()));
+#pragma omp parallel for schedule(dynamic, 8) if (parallel)
+    for (long m = m0; m < m1; ++m) {
+      const auto& p = pairs[in[std::size_t(m)]];
+      const double ai = a[std::size_t(p.i)], aj = a[std::size_t(p.j)];
+      MatX B = pair_block(-p.r, ai, aj);  // r_vec = x_j - x_i
+      if (wt[std::size_t(m)] < 1.0) B *= wt[std::size_t(m)];
+      double* ij = entry(p.i, p.j, 0, 0);
+      double* ji = entry(p.j, p.i, 0, 0);
+      double* dg = diag.data() + std::size_t(m - m0) * std::size_t(2 * d * d);
       for (int v = 0; v < d; ++v)
-        for (int u = 0; u < d; ++u) qq[outer[q * d + v] - outer[q * d] + u] += dg[v * d + u];
+        for (int u = 0; u < d; ++u) {
+          ij[outer[p.j * d + v] - outer[p.j * d] + u] = B(u, d + v);
+          ji[outer[p.i * d + v] - outer[p.i * d] + u] = B(d + u, v);
+          dg[v * d + u] = B(u, v);
+          dg[d * d + v * d + u] = B(d + u, d + v);
+        }
+    }
+#pragma omp parallel for schedule(dynamic, 64) if (parallel)
+    for (long q = 0; q < n; ++q) {
+      long& t = cursor[std::size_t(q)];
+      if (t == first[std::size_t(q) + 1] || incidence[std::size_t(t)] / 2 >= m1) continue;
+      double* qq = entry(int(q), int(q), 0, 0);
+      for (; t < first[std::size_t(q) + 1] && incidence[std::size_t(t)] / 2 < m1; ++t) {
+        const long m = incidence[std::size_t(t)] / 2, side = incidence[std::size_t(t)] % 2;
+        const double* dg = diag.data() + std::size_t(m - m0) * std::size_t(2 * d * d) + std::size_t(side * d * d);
+        for (int v = 0; v < d; ++v)
+          for (int u = 0; u < d; ++u) qq[outer[q * d + v] - outer[q * d] + u] += dg[v * d + u];
+      }
     }
   }
   if (stats) *stats = st;
-  return R;
 }
 
 void NearField::factorize(const SparseMatrix& R, CholmodFactor& factor, const std::vector<Vec3>& x,

@@ -154,6 +154,59 @@ TEST_CASE("sparse near-field assembly is bitwise independent of the thread count
   }
 }
 
+TEST_CASE("sparse near-field assembly over many chunks of pairs equals a plain triplet sum") {
+  // More pairs than one chunk of the assembly (16384): 800 spheres, phi 0.25, cutoff 8, F, periodic.
+  // Reference: every pair by minimum image, pair_block_reference times the switch, summed by
+  // Eigen's triplets. Then once more into the same matrix (storage reused) and on one thread.
+  std::mt19937_64 rng(31);
+  std::uniform_real_distribution<double> u(0, 1);
+  const double L = std::cbrt(800 * 4.18879 / 0.25);
+  const Domain box = Domain::periodic_box(Vec3(L, L, L));
+  std::vector<Vec3> x;
+  while (x.size() < 800) {
+    const Vec3 p(L * u(rng), L * u(rng), L * u(rng));
+    bool ok = true;
+    for (const Vec3& q : x) ok &= box.minimum_image(p - q).norm() > 2.01;
+    if (ok) x.push_back(p);
+  }
+  const std::vector<double> a(x.size(), 1.0);
+  lubrication::NearFieldParams np;
+  np.cutoff = 8.0;
+  np.taper = 1.0;
+  const lubrication::NearField nf(Moments::F, 1.0, np);
+  std::vector<Eigen::Triplet<double>> t;
+  long pairs = 0;
+  for (std::size_t i = 0; i < x.size(); ++i)
+    for (std::size_t j = i + 1; j < x.size(); ++j) {
+      const Vec3 r = box.minimum_image(x[j] - x[i]);
+      const double w = nf.weight(r.norm());
+      if (w <= 0.0) continue;
+      ++pairs;
+      const MatX B = w * nf.pair_block_reference(r, 1.0, 1.0);
+      const long idx[2] = {long(i), long(j)};
+      for (int p = 0; p < 2; ++p)
+        for (int q = 0; q < 2; ++q)
+          for (int u2 = 0; u2 < 3; ++u2)
+            for (int v = 0; v < 3; ++v) t.emplace_back(int(3 * idx[p] + u2), int(3 * idx[q] + v), B(3 * p + u2, 3 * q + v));
+    }
+  Eigen::SparseMatrix<double> ref(3 * 800, 3 * 800);
+  ref.setFromTriplets(t.begin(), t.end());
+  lubrication::NearFieldStats st;
+  lubrication::SparseMatrix R = nf.assemble(x, a, box, &st);
+  CHECK(st.pairs == pairs);
+  CHECK(pairs > 2 * 16384);
+  const double scale = ref.norm();
+  CHECK((Eigen::SparseMatrix<double>(R) - ref).norm() <= 1e-12 * scale);
+  const std::vector<double> first(R.valuePtr(), R.valuePtr() + R.nonZeros());
+  nf.assemble(x, a, box, R);  // into the same storage
+  CHECK(std::equal(first.begin(), first.end(), R.valuePtr()));
+  const int before = omp_get_max_threads();
+  omp_set_num_threads(1);
+  const lubrication::SparseMatrix one = nf.assemble(x, a, box);
+  omp_set_num_threads(before);
+  CHECK(std::equal(first.begin(), first.end(), one.valuePtr()));
+}
+
 TEST_CASE("unequal-sphere pair resistance of SD is symmetric positive definite down to the minimum gap") {
   for (double b : {4.0, 0.1}) {
     for (double xi : {1e-6, 1e-5, 1e-3, 0.1, 1.0, 3.0}) {
