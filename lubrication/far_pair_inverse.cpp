@@ -3,6 +3,7 @@
 
 #include "engine/kernels/mobility_pair.hpp"
 
+#include <array>
 #include <cmath>
 #include <stdexcept>
 
@@ -94,27 +95,28 @@ FarPairInverse::FarPairInverse(Moments m) : m_(m), d_(dof_per_particle(m)) {
   std::vector<Region> regions{{0, 0, 3, 3, 1}};
   if (m != Moments::F) regions.insert(regions.end(), {{3, 0, 3, 3, 2}, {3, 3, 3, 3, 3}});
   if (m == Moments::FTS) regions.insert(regions.end(), {{6, 0, 5, 3, 2}, {6, 3, 5, 3, 3}, {6, 6, 5, 5, 3}});
+  std::vector<std::array<int, 2>> entries;
+  std::vector<int> power;
   for (const Region& g : regions)
     for (int i = 0; i < g.rows; ++i)
       for (int j = 0; j < g.cols; ++j) {
-        entries_.push_back({g.r0 + i, g.c0 + j});
-        power_.push_back(g.power);
+        entries.push_back({g.r0 + i, g.c0 + j});
+        power.push_back(g.power);
       }
   const int ntypes = m == Moments::F ? 2 : m == Moments::FT ? 5 : 11;
-  for (int t = 0; t < ntypes; ++t) types_.push_back(t);
-  // Unit-scalar patterns of block (1, 1) at L = 1 (a1 = a2 = 1/2, mu = 1), fitted by least squares.
-  MatX D(long(entries_.size()), ntypes);
+  // Unit-scalar patterns of sphere 1's self block at L = 1 (a1 = a2 = 1/2, mu = 1), fitted by least
+  // squares.
+  MatX D(long(entries.size()), ntypes);
   for (int t = 0; t < ntypes; ++t) {
     ResistanceScalars s11{}, s22{};
     scalar_at(s11, member(t, false)) = 1.0;
     const PairMatrix R = two_sphere_resistance(Vec3(0.0, 0.0, 3.0), 0.5, 0.5, 1.0, s11, s22);
-    for (std::size_t e = 0; e < entries_.size(); ++e) D(long(e), t) = R(entries_[e][0], entries_[e][1]);
+    for (std::size_t e = 0; e < entries.size(); ++e) D(long(e), t) = R(entries[e][0], entries[e][1]);
   }
-  fit_ = D.completeOrthogonalDecomposition().pseudoInverse();
+  const MatX fit = D.completeOrthogonalDecomposition().pseudoInverse();
   for (int t = 0; t < ntypes; ++t)
-    for (std::size_t e = 0; e < entries_.size(); ++e)
-      if (std::abs(fit_(t, long(e))) > 1e-12)
-        terms_.push_back({t, entries_[e][0], entries_[e][1], power_[e], fit_(t, long(e))});
+    for (std::size_t e = 0; e < entries.size(); ++e)
+      if (std::abs(fit(t, long(e))) > 1e-12) terms_.push_back({t, entries[e][0], entries[e][1], power[e], fit(t, long(e))});
   // The same patterns hold for the three other blocks (checked here, once).
   for (int a = 0; a < 2; ++a)
     for (int b = 0; b < 2; ++b) {
@@ -122,8 +124,8 @@ FarPairInverse::FarPairInverse(Moments m) : m_(m), d_(dof_per_particle(m)) {
         ResistanceScalars s11{}, s22{};
         scalar_at(a == 0 ? s11 : s22, member(t, a != b)) = 1.0;
         const PairMatrix R = two_sphere_resistance(Vec3(0.0, 0.0, 3.0), 0.5, 0.5, 1.0, s11, s22);
-        for (std::size_t e = 0; e < entries_.size(); ++e)
-          if (std::abs(R(11 * a + entries_[e][0], 11 * b + entries_[e][1]) - D(long(e), t)) > 1e-12)
+        for (std::size_t e = 0; e < entries.size(); ++e)
+          if (std::abs(R(11 * a + entries[e][0], 11 * b + entries[e][1]) - D(long(e), t)) > 1e-12)
             throw std::logic_error("FarPairInverse: the blocks' scalar patterns differ");
       }
     }

@@ -28,7 +28,6 @@
 #include "engine/core/types.hpp"
 #include "lubrication/resistance_functions.hpp"
 
-#include <array>
 #include <vector>
 
 namespace stokesian::lubrication {
@@ -46,17 +45,13 @@ class FarPairInverse {
   Moments m_;
   int d_;
   std::vector<std::vector<int>> groups_;  // pair-frame coordinates (0 .. 2d-1) of each group
-  // Owned entries of one block (row, column inside the d x d block), their power of L, the scalar
-  // types fitted (0..10: XA YA YB XC YC XG YG YH XM YM ZM) and the least-squares fit (types x entries).
-  std::vector<std::array<int, 2>> entries_;
-  std::vector<int> power_;
-  std::vector<int> types_;
-  MatX fit_;
+  // The least-squares fit (far_pair_inverse.cpp) as its non-zero terms: scalar type (0..10: XA YA YB
+  // XC YC XG YG YH XM YM ZM), entry (row, column) inside a d x d block, power of L, weight.
   struct Term {
     int type, row, col, power;
     double weight;
   };
-  std::vector<Term> terms_;  // the non-zero weights of fit_ (one or two per scalar)
+  std::vector<Term> terms_;
 };
 
 }  // namespace stokesian::lubrication
