@@ -518,12 +518,16 @@ PmeParameters search(double tol, const Lattice& lattice, int n, double a_min, do
       // Effective upsampling of the grid actually used (fft_size rounds up).
       double sig = std::numeric_limits<double>::infinity();
       for (int d = 0; d < 3; ++d) sig = std::min(sig, M[d] * kPi / (k_in * len[d]));
-      for (int P = 3; P <= 32; ++P) {
-        const double cost = fixed + 2.0 * cc.point * n * double(P) * P * P + kSetupWindow * n * P * setup_share;
-        if (cost >= best_cost) break;
-        double best_e = std::numeric_limits<double>::infinity(), best_shape = 0.0;
-        // Shape: a coarse scan, then (when the best is within 4x of the budget, where the answer may
-        // change) two halvings of the step around the best.
+      auto cost_of = [&](int P) {
+        return fixed + 2.0 * cc.point * n * double(P) * P * P + kSetupWindow * n * P * setup_share;
+      };
+      // Smallest aliasing-and-edge error over the window shape at support P: a coarse scan, then
+      // (when the best is within 4x of the budget, where the answer may change) two halvings of the
+      // step around the best.
+      struct Shaped {
+        double e = std::numeric_limits<double>::infinity(), shape = 0.0;
+      };
+      auto shaped = [&](int P) {
         auto shape_of = [&](double f) {
           return opt.window == WindowKind::kaiser_bessel
                      ? f * kPi * P * (1.0 - 0.5 / std::max(sig, 1.0))  // beta = kappa pi P (1 - 1 / (2 sigma))
@@ -531,33 +535,52 @@ PmeParameters search(double tol, const Lattice& lattice, int n, double a_min, do
                      // below the tolerance; the model counts the truncation (its edge jumps) exactly.
                      : f * P / (2.0 * std::sqrt(2.0 * std::log(10.0 / (kSafety * tol))));
         };
+        Shaped out;
         double best_f = 0.0;
         auto try_shape = [&](double f) {
           const double shape = shape_of(f);
           const double e = alias_error2(Window1D(opt.window, P, shape));
-          if (e < best_e) best_e = e, best_shape = shape, best_f = f;
+          if (e < out.e) out.e = e, out.shape = shape, best_f = f;
         };
         const bool kb = opt.window == WindowKind::kaiser_bessel;
         for (int i = 0; i < (kb ? 7 : 6); ++i) try_shape((kb ? 0.9 : 0.6) + 0.1 * i);
-        for (double step = 0.05; step > 0.02 && best_e > budget && best_e < 4.0 * budget; step *= 0.5) {
+        for (double step = 0.05; step > 0.02 && out.e > budget && out.e < 4.0 * budget; step *= 0.5) {
           const double f0 = best_f;
           try_shape(f0 - step);
           try_shape(f0 + step);
         }
-        if (best_e > budget) continue;
+        return out;
+      };
+      // The cost grows with P and the error falls with it: the largest P that could still beat the
+      // best so far, then bisection for the smallest P meeting the budget (about six evaluations; a
+      // grid that fails at its largest P costs one, where a scan from P = 3 cost up to thirty).
+      int Pmax = 2;
+      while (Pmax < 32 && cost_of(Pmax + 1) < best_cost) ++Pmax;
+      if (Pmax < 3) continue;
+      Shaped at_hi = shaped(Pmax);
+      if (at_hi.e > budget) continue;
+      int lo = 3, hi = Pmax;
+      while (lo < hi) {
+        const int mid = (lo + hi) / 2;
+        const Shaped s_mid = shaped(mid);
+        if (s_mid.e <= budget) hi = mid, at_hi = s_mid;
+        else lo = mid + 1;
+      }
+      {
+        const int P = hi;
+        const double cost = cost_of(P);
         best_cost = cost;
         best.xi = xi;
         best.cutoff_gap = gap;
         best.grid = M;
         best.support = P;
-        best.shape = best_shape;
+        best.shape = at_hi.shape;
         best.k_max = k_in * sig;
         best.est_real = std::sqrt(real_error2(gap, xi) / S2);
         best.est_wave = std::sqrt(wave_error2(k_in, xi) / S2);
-        best.est_alias = std::sqrt(best_e / S2);
+        best.est_alias = std::sqrt(at_hi.e / S2);
         best.est_cost = cost;
         best.est_setup = kSetupParticle * n + kSetupWindow * n * P + setup_entry(m) * 2.0 * pairs;
-        break;
       }
     }
   }
