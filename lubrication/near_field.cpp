@@ -17,13 +17,13 @@
 namespace stokesian::lubrication {
 
 namespace {
-// Indices of the level-m entries inside the 22-entry FTS pair layout [F1 T1 S1 F2 T2 S2].
-std::vector<int> level_indices(Moments m) {
+// The level-m rows and columns of a pair matrix in the 22-entry FTS layout [F1 T1 S1 F2 T2 S2].
+MatX level_block(const PairMatrix& R, Moments m) {
   const int d = dof_per_particle(m);
-  std::vector<int> idx;
-  for (int p = 0; p < 2; ++p)
-    for (int k = 0; k < d; ++k) idx.push_back(11 * p + k);
-  return idx;
+  MatX out(2 * d, 2 * d);
+  for (int q = 0; q < 2 * d; ++q)
+    for (int p = 0; p < 2 * d; ++p) out(p, q) = R(p < d ? p : p - d + 11, q < d ? q : q - d + 11);
+  return out;
 }
 }  // namespace
 
@@ -58,12 +58,7 @@ NearFieldParams near_field_params(const HydroParams& h, Moments moments, double 
 MatX NearField::exact_pair(const Vec3& r_vec, double ai, double aj) const {
   ResistanceScalars s12, s21;
   tables_.pair_scalars(r_vec.norm(), ai, aj, s12, s21);
-  const PairMatrix R = two_sphere_resistance(r_vec, ai, aj, mu_, s12, s21);
-  const auto idx = level_indices(m_);
-  MatX out(idx.size(), idx.size());
-  for (std::size_t p = 0; p < idx.size(); ++p)
-    for (std::size_t q = 0; q < idx.size(); ++q) out(long(p), long(q)) = R(idx[p], idx[q]);
-  return out;
+  return level_block(two_sphere_resistance(r_vec, ai, aj, mu_, s12, s21), m_);
 }
 
 MatX NearField::pair_block(const Vec3& r_vec_in, double ai, double aj) const {
@@ -81,13 +76,7 @@ MatX NearField::pair_block(const Vec3& r_vec_in, double ai, double aj) const {
     scalar_at(s12, k) -= scalar_at(f12, k);
     scalar_at(s21, k) -= scalar_at(f21, k);
   }
-  const PairMatrix R = two_sphere_resistance(r_vec, ai, aj, mu_, s12, s21);
-  // The level's rows and columns of the FTS layout [F1 T1 S1 F2 T2 S2] (level_indices above).
-  const int d = dof_per_particle(m_);
-  MatX out(2 * d, 2 * d);
-  for (int q = 0; q < 2 * d; ++q)
-    for (int p = 0; p < 2 * d; ++p) out(p, q) = R(p < d ? p : p - d + 11, q < d ? q : q - d + 11);
-  return out;
+  return level_block(two_sphere_resistance(r_vec, ai, aj, mu_, s12, s21), m_);
 }
 
 MatX NearField::pair_block_reference(const Vec3& r_vec_in, double ai, double aj) const {

@@ -18,6 +18,26 @@
 using namespace stokesian;
 
 namespace {
+// n spheres with radii uniform in [amin, amax) at centres uniform in [0, L)^3, surfaces at least
+// 1e-3 apart (plain distances), drawn from rng in order.
+std::pair<std::vector<Vec3>, std::vector<double>> random_cloud(std::mt19937_64& rng, std::size_t n, double L,
+                                                                double amin, double amax) {
+  std::uniform_real_distribution<double> u(0, 1);
+  std::vector<Vec3> x;
+  std::vector<double> a;
+  while (x.size() < n) {
+    const Vec3 p(L * u(rng), L * u(rng), L * u(rng));
+    const double ai = amin + (amax - amin) * u(rng);
+    bool ok = true;
+    for (std::size_t k = 0; k < x.size(); ++k) ok &= (p - x[k]).norm() > ai + a[k] + 1e-3;
+    if (ok) {
+      x.push_back(p);
+      a.push_back(ai);
+    }
+  }
+  return {x, a};
+}
+
 // Mobility of the pair from SD: inverse of R = M_inf^{-1} + R_nf, and the exact two-sphere
 // mobility: inverse of the exact resistance (lubrication/resistance_functions).
 struct PairMobilities {
@@ -60,21 +80,9 @@ TEST_CASE("two-sphere SD equals the exact two-sphere resistance inside the cutof
 
 TEST_CASE("sparse near-field assembly equals the dense twin; R is symmetric positive definite") {
   std::mt19937_64 rng(17);
-  std::uniform_real_distribution<double> u(0, 1);
   for (Moments m : {Moments::F, Moments::FT, Moments::FTS}) {
-    std::vector<Vec3> x;
-    std::vector<double> a;
     // Polydisperse cloud with many close pairs, no overlaps.
-    while (x.size() < 25) {
-      const Vec3 p(9 * u(rng), 9 * u(rng), 9 * u(rng));
-      const double ai = 0.4 + 1.2 * u(rng);
-      bool ok = true;
-      for (std::size_t k = 0; k < x.size(); ++k) ok &= (p - x[k]).norm() > ai + a[k] + 1e-3;
-      if (ok) {
-        x.push_back(p);
-        a.push_back(ai);
-      }
-    }
+    const auto [x, a] = random_cloud(rng, 25, 9.0, 0.4, 1.6);
     lubrication::NearField nf(m, 1.0);
     lubrication::NearFieldStats st;
     const MatX sparse = MatX(nf.assemble(x, a, Domain{}, &st));
@@ -123,19 +131,7 @@ TEST_CASE("near-field pair block from two-sphere scalars equals its reference tw
 TEST_CASE("sparse near-field assembly is bitwise independent of the thread count") {
   // Pair blocks in parallel, diagonal blocks summed per particle in pair order (near_field.cpp).
   std::mt19937_64 rng(23);
-  std::uniform_real_distribution<double> u(0, 1);
-  std::vector<Vec3> x;
-  std::vector<double> a;
-  while (x.size() < 120) {
-    const Vec3 p(10 * u(rng), 10 * u(rng), 10 * u(rng));
-    const double ai = 0.5 + 0.7 * u(rng);
-    bool ok = true;
-    for (std::size_t k = 0; k < x.size(); ++k) ok &= (p - x[k]).norm() > ai + a[k] + 1e-3;
-    if (ok) {
-      x.push_back(p);
-      a.push_back(ai);
-    }
-  }
+  const auto [x, a] = random_cloud(rng, 120, 10.0, 0.5, 1.2);
   const Domain box = Domain::periodic_box(Vec3(10, 10, 10));
   for (Moments m : {Moments::F, Moments::FTS}) {
     const lubrication::NearField nf(m, 1.0);
