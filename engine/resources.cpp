@@ -217,7 +217,11 @@ ResourceEstimate estimate_resources(const Scene& s, const ResolvedModel& model) 
       const double p_nf = N * neighbours(N, rho, r_nf) / 2;
       Keys k = model_keys;
       add_key(k, s, "hydrodynamics", "lubrication_cutoff");
-      e.components.push_back({"near-field sparse matrix", (N + 2 * p_nf) * d * d * 28.0,
+      // Symmetric d x d blocks (lubrication/block_matrix.hpp), one per particle and pair; dense SD
+      // also keeps both triangles in compressed columns (12 bytes per entry) and their triplets (16).
+      const bool dense = model.solver == "dense_sd";
+      e.components.push_back({"near-field sparse matrix",
+                              (N + p_nf) * d * d * 8.0 + (dense ? (N + 2 * p_nf) * d * d * 28.0 : 0.0),
                               num(p_nf) + " pairs with 2r/(a_i+a_j) < " + num(cut) + ", " + dN,
                               k});
       if (model.brownian) {
@@ -227,12 +231,13 @@ ResourceEstimate estimate_resources(const Scene& s, const ResolvedModel& model) 
                                 "about 100 vectors of d N doubles, " + dN, model_keys});
       }
       if (model.solver == "accelerated_sd") {
-        // GMRES basis (restart + 1 vectors), the pair blocks' diagonal parts kept during assembly
-        // (2 d^2 doubles per pair), the factorised velocity block (~a third of R_nf's entries).
-        // Measured peak RSS of configs/dense_shear_asd.toml (N = 1e4, 1.8e5 pairs, FTS): 1.62 GB
-        // against 1.88 GB estimated in all.
+        // GMRES basis (restart + 1 vectors), the pair blocks' diagonal parts of one chunk of 16384
+        // pairs during assembly (2 d^2 doubles per pair), the product's slice buffers (at most
+        // kChunks d N doubles), the factorised velocity block (~a third of R_nf's entries).
         const double gmres = (AcceleratedStokesianDynamics::kRestart + 1) * N * d * 8.0;
-        const double buffer = p_nf * 2.0 * d * d * 8.0, factored = (N + 2 * p_nf) * d * d * 12.0 / 3.0;
+        const double buffer = std::min(p_nf, 16384.0) * 2.0 * d * d * 8.0 +
+                              lubrication::SymmetricBlockMatrix::kChunks * n * 8.0;  // slices' product buffers
+        const double factored = (N + 2 * p_nf) * d * d * 12.0 / 3.0;
         e.components.push_back({"accelerated SD solve", gmres + buffer + factored,
                                 "GMRES(" + std::to_string(AcceleratedStokesianDynamics::kRestart) +
                                     ") basis, near-field assembly buffer, factorised velocity block",

@@ -73,29 +73,25 @@ void AcceleratedStokesianDynamics::factorise(const std::vector<long>& v) {
   std::vector<int> pos(std::size_t(n), -1);
   for (std::size_t i = 0; i < v.size(); ++i) pos[std::size_t(v[i])] = int(i);
   std::vector<Eigen::Triplet<double, int>> t;
-  t.reserve(std::size_t(Rnf_.nonZeros()) / 2 + v.size());
   const int d = dof_per_particle(m_);
-  for (int col = 0; col < Rnf_.outerSize(); ++col) {
-    const int cj = pos[std::size_t(col)];
-    if (cj < 0) continue;
-    const long q = col / d;
-    long last = -1;
-    bool strong = true;
-    for (lubrication::SparseMatrix::InnerIterator it(Rnf_, col); it; ++it) {
-      const int ri = pos[std::size_t(it.row())];
-      if (ri < 0 || ri > cj) continue;
-      const long p = it.row() / d;
-      if (p != last) {  // entries come in blocks of one particle p
-        last = p;
-        strong = true;
-        if (p != q && factor_gap_ < 1e300) {
-          const double r = config_.domain.minimum_image(config_.x[std::size_t(p)] - config_.x[std::size_t(q)]).norm();
-          strong = 2.0 * r / (config_.a[std::size_t(p)] + config_.a[std::size_t(q)]) - 2.0 < factor_gap_;
+  // Stored blocks (p, q), p <= q: a strong pair's entries (both at v) go to the upper triangle of R~.
+  for (long p = 0; p < Rnf_.block_rows(); ++p)
+    for (long b = Rnf_.row_begin(p); b < Rnf_.row_end(p); ++b) {
+      const long q = Rnf_.col(b);
+      if (p != q && factor_gap_ < 1e300) {
+        const double r = config_.domain.minimum_image(config_.x[std::size_t(p)] - config_.x[std::size_t(q)]).norm();
+        if (!(2.0 * r / (config_.a[std::size_t(p)] + config_.a[std::size_t(q)]) - 2.0 < factor_gap_)) continue;
+      }
+      const double* B = Rnf_.block(b);
+      for (int w = 0; w < d; ++w) {
+        const int cj = pos[std::size_t(q * d + w)];
+        if (cj < 0) continue;
+        for (int u = 0; u < (p == q ? w + 1 : d); ++u) {
+          const int ri = pos[std::size_t(p * d + u)];
+          if (ri >= 0) t.emplace_back(std::min(ri, cj), std::max(ri, cj), B[w * d + u]);
         }
       }
-      if (strong) t.emplace_back(ri, cj, it.value());
     }
-  }
   for (std::size_t i = 0; i < v.size(); ++i) t.emplace_back(int(i), int(i), shift_ * D_[v[i]]);
   Rt_.resize(long(v.size()), long(v.size()));
   Rt_.setFromTriplets(t.begin(), t.end());
@@ -232,11 +228,13 @@ HydroResult AcceleratedStokesianDynamics::solve(const HydroProblem& p) {
   const long n = long(c.force.size()), nv = long(v.size());
   const auto t0 = std::chrono::steady_clock::now();
 
-  // R_nf z. R_nf is symmetric with both triangles stored (near_field.hpp), so R_nf z = R_nf^T z, and
-  // the transpose is a row-major operand: Eigen computes its rows in parallel (OpenMP), each row's
-  // sum in a fixed order, so the result does not depend on the thread count. The column-major
-  // product runs on one thread (10 % of a one-thread Brownian step at N = 1e4 under perf).
-  auto near_product = [&](const VecX& z) -> VecX { return Rnf_.transpose() * z; };
+  // R_nf z from the symmetric blocks (lubrication/block_matrix.hpp): each stored block read once,
+  // in parallel, the same bits for any thread count.
+  auto near_product = [&](const VecX& z) -> VecX {
+    VecX out;
+    Rnf_.multiply(z, out);
+    return out;
+  };
   // g = f_v + f_B,v - R_vk V_k (c.motion vanishes at v).
   const VecX RVk = near_product(c.motion);
   VecX g(nv);

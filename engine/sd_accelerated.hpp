@@ -168,7 +168,7 @@ class AcceleratedStokesianDynamics final : public HydroSolver {
   lubrication::SparseMatrix Rt_;  // R~ (upper triangle), the factorised matrix
   Method method_;
   StoredConfiguration config_;
-  lubrication::SparseMatrix Rnf_;
+  lubrication::SymmetricBlockMatrix Rnf_;
   lubrication::NearFieldStats near_stats_;
   VecX D_;                       // self resistance per entry
   std::vector<long> factored_v_;  // index set of the factor below

@@ -120,23 +120,24 @@ MatX NearField::pair_block_reference(const Vec3& r_vec_in, double ai, double aj)
 
 SparseMatrix NearField::assemble(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain,
                                  NearFieldStats* stats) const {
-  SparseMatrix R;
+  SymmetricBlockMatrix R;
   assemble(x, a, domain, R, stats);
-  return R;
+  return R.to_sparse();
 }
 
 void NearField::assemble(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain,
-                         SparseMatrix& R, NearFieldStats* stats) const {
+                         SymmetricBlockMatrix& R, NearFieldStats* stats) const {
   const int d = dof_per_particle(m_);
+  const long dd = long(d) * d;
   const double amax = *std::max_element(a.begin(), a.end());
   // exact tables for few distinct size ratios, interpolated in ln(lambda) otherwise
   if (p_.model == Lubrication::exact) tables_.prepare_radii(a);
   const auto pairs = trees::neighbor_pairs(x, a, domain, (p_.cutoff - 2.0) * amax);
-  // The sparse pattern first (block column j: row blocks j and its partners, ascending), then the
-  // pair blocks in parallel, a chunk of pairs at a time: off-diagonal blocks straight into their own
-  // places, the two diagonal parts into a chunk buffer whose parts each particle then adds in pair
-  // order (the same sums for any thread count). No triplet list: the peak memory is the matrix plus
-  // 2 d^2 doubles per pair of one chunk.
+  // The block pattern first (block_matrix.hpp: diagonal, then the upper partners ascending), then
+  // the pair blocks in parallel, a chunk of pairs at a time: the off-diagonal block straight into its
+  // place, the two diagonal parts into a chunk buffer whose parts each particle then adds in pair
+  // order (the same sums for any thread count). The peak memory is the matrix plus 2 d^2 doubles per
+  // pair of one chunk.
   const long n = long(x.size());
   std::vector<std::size_t> in;  // pairs with a non-zero weight, in pair order
   std::vector<double> wt;
@@ -148,48 +149,19 @@ void NearField::assemble(const std::vector<Vec3>& x, const std::vector<double>& 
       wt.push_back(w);
     }
   }
-  std::vector<std::vector<int>> rows(static_cast<std::size_t>(n));
+  std::vector<std::vector<int>> upper(static_cast<std::size_t>(n));
+  std::vector<char> has_pair(static_cast<std::size_t>(n), 0);
   for (std::size_t k : in) {
-    rows[std::size_t(pairs[k].i)].push_back(pairs[k].j);
-    rows[std::size_t(pairs[k].j)].push_back(pairs[k].i);
+    const int i = pairs[k].i, j = pairs[k].j;
+    upper[std::size_t(std::min(i, j))].push_back(std::max(i, j));
+    has_pair[std::size_t(i)] = has_pair[std::size_t(j)] = 1;
   }
-  for (long q = 0; q < n; ++q) {
-    auto& r = rows[std::size_t(q)];
-    if (r.empty()) continue;
-    r.push_back(int(q));
-    std::sort(r.begin(), r.end());
-  }
-  long nnz = 0;
-  for (const auto& r : rows) nnz += long(r.size()) * d * d;
-  if (R.rows() != n * d || R.cols() != n * d || !R.isCompressed()) R = SparseMatrix(n * d, n * d);
-  R.resizeNonZeros(nnz);  // keeps the storage when it is large enough
-  int* outer = R.outerIndexPtr();
-  int* inner = R.innerIndexPtr();
-  double* val = R.valuePtr();
-  {
-    long at = 0;
-    for (long q = 0; q < n; ++q)
-      for (int c = 0; c < d; ++c) {
-        outer[q * d + c] = int(at);
-        for (int rq : rows[std::size_t(q)])
-          for (int u = 0; u < d; ++u) inner[at++] = rq * d + u;
-      }
-    outer[n * d] = int(at);
-  }
+  for (auto& u : upper) std::sort(u.begin(), u.end());
+  R.reset(n, d, has_pair, upper);
   // Every off-diagonal block is written whole by its pair below;
   // only the diagonal blocks, which sum their pairs' parts, start from zero.
-  for (long q = 0; q < n; ++q) {
-    const auto& r = rows[std::size_t(q)];
-    if (r.empty()) continue;
-    const long pos = long(std::lower_bound(r.begin(), r.end(), int(q)) - r.begin());
-    for (int v = 0; v < d; ++v) std::fill_n(val + outer[q * d + v] + pos * d, d, 0.0);
-  }
-  // Entry (row block rq, column block q, u, v).
-  auto entry = [&](int rq, int q, int u, int v) {
-    const auto& r = rows[std::size_t(q)];
-    const long pos = long(std::lower_bound(r.begin(), r.end(), rq) - r.begin());
-    return val + outer[q * d + v] + pos * d + u;
-  };
+  for (long q = 0; q < n; ++q)
+    if (has_pair[std::size_t(q)]) std::fill_n(R.block(R.row_begin(q)), dd, 0.0);
   NearFieldStats st;
   for (std::size_t m = 0; m < in.size(); ++m) {
     const auto& p = pairs[in[m]];
@@ -222,7 +194,7 @@ void NearField::assemble(const std::vector<Vec3>& x, const std::vector<double>& 
   std::copy(first.begin(), first.end() - 1, cursor.begin());  // per particle: next incidence to add
   const long chunk = 16384;
   const bool parallel = long(in.size()) >= parallel::kNearFieldPairs;
-  std::vector<double> diag(std::size_t(std::min<long>(chunk, long(in.size()))) * std::size_t(2 * d * d));
+  std::vector<double> diag(std::size_t(std::min<long>(chunk, long(in.size()))) * std::size_t(2 * dd));
   for (long m0 = 0; m0 < long(in.size()); m0 += chunk) {
     const long m1 = std::min<long>(m0 + chunk, long(in.size()));
 #pragma omp parallel for schedule(dynamic, 8) if (parallel)
@@ -231,27 +203,26 @@ void NearField::assemble(const std::vector<Vec3>& x, const std::vector<double>& 
       const double ai = a[std::size_t(p.i)], aj = a[std::size_t(p.j)];
       MatX B = pair_block(-p.r, ai, aj);  // r_vec = x_j - x_i
       if (wt[std::size_t(m)] < 1.0) B *= wt[std::size_t(m)];
-      double* ij = entry(p.i, p.j, 0, 0);
-      double* ji = entry(p.j, p.i, 0, 0);
-      double* dg = diag.data() + std::size_t(m - m0) * std::size_t(2 * d * d);
+      // The stored block (min, max): A_ij = B(0:d, d:2d) when i < j, else A_ji = B(d:2d, 0:d).
+      const bool ij = p.i < p.j;
+      double* off = R.block(R.find(std::min(p.i, p.j), std::max(p.i, p.j)));
+      double* dg = diag.data() + std::size_t(m - m0) * std::size_t(2 * dd);
       for (int v = 0; v < d; ++v)
         for (int u = 0; u < d; ++u) {
-          ij[outer[p.j * d + v] - outer[p.j * d] + u] = B(u, d + v);
-          ji[outer[p.i * d + v] - outer[p.i * d] + u] = B(d + u, v);
+          off[v * d + u] = ij ? B(u, d + v) : B(d + u, v);
           dg[v * d + u] = B(u, v);
-          dg[d * d + v * d + u] = B(d + u, d + v);
+          dg[dd + v * d + u] = B(d + u, d + v);
         }
     }
 #pragma omp parallel for schedule(dynamic, 64) if (parallel)
     for (long q = 0; q < n; ++q) {
       long& t = cursor[std::size_t(q)];
       if (t == first[std::size_t(q) + 1] || incidence[std::size_t(t)] / 2 >= m1) continue;
-      double* qq = entry(int(q), int(q), 0, 0);
+      double* qq = R.block(R.row_begin(q));
       for (; t < first[std::size_t(q) + 1] && incidence[std::size_t(t)] / 2 < m1; ++t) {
         const long m = incidence[std::size_t(t)] / 2, side = incidence[std::size_t(t)] % 2;
-        const double* dg = diag.data() + std::size_t(m - m0) * std::size_t(2 * d * d) + std::size_t(side * d * d);
-        for (int v = 0; v < d; ++v)
-          for (int u = 0; u < d; ++u) qq[outer[q * d + v] - outer[q * d] + u] += dg[v * d + u];
+        const double* dg = diag.data() + std::size_t(m - m0) * std::size_t(2 * dd) + std::size_t(side * dd);
+        for (long e = 0; e < dd; ++e) qq[e] += dg[e];
       }
     }
   }

@@ -20,6 +20,7 @@
 #include "engine/core/domain.hpp"
 #include "engine/core/scene.hpp"
 #include "engine/core/types.hpp"
+#include "lubrication/block_matrix.hpp"
 #include "lubrication/cholmod_factor.hpp"
 #include "lubrication/cutoff.hpp"
 #include "lubrication/far_pair_inverse.hpp"
@@ -59,14 +60,14 @@ class NearField {
  public:
   NearField(Moments m, double mu, NearFieldParams p = {});
 
-  // Sparse R_nf (d N x d N, both triangles stored) over the pairs found by trees::neighbor_pairs.
+  // R_nf over the pairs found by trees::neighbor_pairs as symmetric d x d blocks (block_matrix.hpp),
+  // reusing R's storage when it is large enough (a solver assembling every step keeps its pages:
+  // fresh pages were a third of the assembly's time at 10^4 spheres).
+  void assemble(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain,
+                SymmetricBlockMatrix& R, NearFieldStats* stats = nullptr) const;
+  // The same as a sparse d N x d N matrix with both triangles stored (dense SD, references).
   SparseMatrix assemble(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain,
                         NearFieldStats* stats = nullptr) const;
-  // The same into R, reusing its storage when it is large enough (a solver assembling every step
-  // keeps its pages: at 10^4 spheres, phi 0.4, cutoff 6 the matrix holds 1.2 GB, and fresh pages
-  // were a third of the assembly's time).
-  void assemble(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain, SparseMatrix& R,
-                NearFieldStats* stats = nullptr) const;
   // Reference twin: dense R_nf from an O(N^2) loop over all pairs (open domains).
   MatX assemble_dense(const std::vector<Vec3>& x, const std::vector<double>& a) const;
 

@@ -128,25 +128,85 @@ TEST_CASE("near-field pair block from two-sphere scalars equals its reference tw
   MESSAGE("largest relative difference " << worst);
 }
 
-TEST_CASE("sparse near-field assembly is bitwise independent of the thread count") {
-  // Pair blocks in parallel, diagonal blocks summed per particle in pair order (near_field.cpp).
+TEST_CASE("symmetric block matrix: product, lookup and both triangles against a dense matrix") {
+  // A random symmetric pattern with empty block rows, rows with only a diagonal, and rows whose
+  // partners cross every slice; values random. Reference: the dense matrix built block by block.
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (int d : {3, 6, 11}) {
+    const long n = 57;
+    std::vector<char> diag(std::size_t(n), 0);
+    std::vector<std::vector<int>> upper(static_cast<std::size_t>(n));
+    for (long i = 0; i < n; ++i)
+      for (long j = i + 1; j < n; ++j)
+        if (u(rng) > 0.6 && i % 7 != 3 && j % 7 != 3) {
+          upper[std::size_t(i)].push_back(int(j));
+          diag[std::size_t(i)] = diag[std::size_t(j)] = 1;
+        }
+    diag[10] = 1;  // a diagonal block without partners
+    lubrication::SymmetricBlockMatrix A;
+    A.reset(n, d, diag, upper);
+    MatX dense = MatX::Zero(n * d, n * d);
+    for (long i = 0; i < n; ++i)
+      for (long b = A.row_begin(i); b < A.row_end(i); ++b) {
+        const long j = A.col(b);
+        CHECK(A.find(i, j) == b);
+        double* B = A.block(b);
+        for (int v = 0; v < d; ++v)
+          for (int w = 0; w < d; ++w) B[v * d + w] = u(rng);
+        if (i == j)  // a symmetric diagonal block
+          for (int v = 0; v < d; ++v)
+            for (int w = 0; w < v; ++w) B[v * d + w] = B[w * d + v];
+        for (int v = 0; v < d; ++v)
+          for (int w = 0; w < d; ++w) {
+            dense(i * d + w, j * d + v) = B[v * d + w];
+            dense(j * d + v, i * d + w) = B[v * d + w];
+          }
+      }
+    CHECK(A.find(3, 4) == -1);
+    CHECK(A.find(0, 3) == -1);
+    CHECK((MatX(A.to_sparse()) - dense).norm() == 0.0);
+    const VecX x = VecX::Random(n * d);
+    const int before = omp_get_max_threads();
+    omp_set_num_threads(1);
+    VecX y1;
+    A.multiply(x, y1);
+    omp_set_num_threads(2);
+    VecX y2;
+    A.multiply(x, y2);
+    omp_set_num_threads(before);
+    CHECK((y1 - dense * x).norm() <= 1e-14 * (dense * x).norm());
+    CHECK(std::equal(y1.data(), y1.data() + y1.size(), y2.data()));
+  }
+}
+
+TEST_CASE("near-field block assembly and its product are bitwise independent of the thread count") {
+  // Pair blocks in parallel, diagonal blocks summed per particle in pair order (near_field.cpp);
+  // the product over fixed slices (block_matrix.hpp).
   std::mt19937_64 rng(23);
   const auto [x, a] = random_cloud(rng, 120, 10.0, 0.5, 1.2);
   const Domain box = Domain::periodic_box(Vec3(10, 10, 10));
   for (Moments m : {Moments::F, Moments::FTS}) {
     const lubrication::NearField nf(m, 1.0);
     const int before = omp_get_max_threads();
+    const VecX z = VecX::Random(long(x.size()) * dof_per_particle(m));
     omp_set_num_threads(1);
     lubrication::NearFieldStats s1, s2;
-    const lubrication::SparseMatrix one = nf.assemble(x, a, box, &s1);
+    lubrication::SymmetricBlockMatrix one, two;
+    nf.assemble(x, a, box, one, &s1);
+    VecX y1;
+    one.multiply(z, y1);
     omp_set_num_threads(2);
-    const lubrication::SparseMatrix two = nf.assemble(x, a, box, &s2);
+    nf.assemble(x, a, box, two, &s2);
+    VecX y2;
+    two.multiply(z, y2);
     omp_set_num_threads(before);
     CHECK(s1.pairs > parallel::kNearFieldPairs);
     CHECK(s1.pairs == s2.pairs);
-    REQUIRE(one.nonZeros() == two.nonZeros());
-    CHECK(std::equal(one.valuePtr(), one.valuePtr() + one.nonZeros(), two.valuePtr()));
-    CHECK(std::equal(one.innerIndexPtr(), one.innerIndexPtr() + one.nonZeros(), two.innerIndexPtr()));
+    REQUIRE(one.stored_blocks() == two.stored_blocks());
+    const long nv = one.stored_blocks() * dof_per_particle(m) * dof_per_particle(m);
+    CHECK(std::equal(one.block(0), one.block(0) + nv, two.block(0)));
+    CHECK(std::equal(y1.data(), y1.data() + y1.size(), y2.data()));
   }
 }
 
@@ -188,19 +248,29 @@ TEST_CASE("sparse near-field assembly over many chunks of pairs equals a plain t
   Eigen::SparseMatrix<double> ref(3 * 800, 3 * 800);
   ref.setFromTriplets(t.begin(), t.end());
   lubrication::NearFieldStats st;
-  lubrication::SparseMatrix R = nf.assemble(x, a, box, &st);
+  const lubrication::SparseMatrix R = nf.assemble(x, a, box, &st);
   CHECK(st.pairs == pairs);
   CHECK(pairs > 2 * 16384);
   const double scale = ref.norm();
   CHECK((Eigen::SparseMatrix<double>(R) - ref).norm() <= 1e-12 * scale);
-  const std::vector<double> first(R.valuePtr(), R.valuePtr() + R.nonZeros());
-  nf.assemble(x, a, box, R);  // into the same storage
-  CHECK(std::equal(first.begin(), first.end(), R.valuePtr()));
+  // The blocks themselves, their product against the reference's, storage reuse and one thread.
+  lubrication::SymmetricBlockMatrix B;
+  nf.assemble(x, a, box, B);
+  const long nv = B.stored_blocks() * 9;
+  const std::vector<double> first(B.block(0), B.block(0) + nv);
+  const VecX z = VecX::Random(3 * 800);
+  VecX y;
+  B.multiply(z, y);
+  const VecX yref = ref * z;
+  CHECK((y - yref).norm() <= 1e-12 * yref.norm());
+  nf.assemble(x, a, box, B);  // into the same storage
+  CHECK(std::equal(first.begin(), first.end(), B.block(0)));
   const int before = omp_get_max_threads();
   omp_set_num_threads(1);
-  const lubrication::SparseMatrix one = nf.assemble(x, a, box);
+  lubrication::SymmetricBlockMatrix one;
+  nf.assemble(x, a, box, one);
   omp_set_num_threads(before);
-  CHECK(std::equal(first.begin(), first.end(), one.valuePtr()));
+  CHECK(std::equal(first.begin(), first.end(), one.block(0)));
 }
 
 TEST_CASE("unequal-sphere pair resistance of SD is symmetric positive definite down to the minimum gap") {
