@@ -7,6 +7,7 @@ namespace stokesian::lubrication {
 
 void SymmetricBlockMatrix::reset(long n, int d, const std::vector<char>& diagonal,
                                  const std::vector<std::vector<int>>& upper) {
+  if (d < 1 || d > 11) throw std::invalid_argument("SymmetricBlockMatrix::reset: block size d must be 1 ... 11");
   if (long(diagonal.size()) != n || long(upper.size()) != n)
     throw std::invalid_argument("SymmetricBlockMatrix::reset: need n diagonal flags and n partner lists");
   n_ = n;
