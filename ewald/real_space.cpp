@@ -202,21 +202,23 @@ double self_min(double a, double mu, Moments m) {
 }
 
 // y += (block with scalars s, unit vector e) x for one source particle; layout [F T S] / [U W E].
-template <Moments M>
-STOKESIAN_RS_INLINE void apply_block(const mobility::PairScalars& s, double ex, double ey, double ez, const double* x, double* y) {
-  const double Fx = x[0], Fy = x[1], Fz = x[2];
-  const double eF = ex * Fx + ey * Fy + ez * Fz;
-  const double cF = (s.xa - s.ya) * eF;
+// T is double, or v4a for four entries at once (lane l of every operand belongs to entry l; S then
+// holds four entries' scalars per field). The same operations in the same order for both.
+template <Moments M, class T, class S>
+STOKESIAN_RS_INLINE void apply_block_t(const S& s, const T& ex, const T& ey, const T& ez, const T* x, T* y) {
+  const T Fx = x[0], Fy = x[1], Fz = x[2];
+  const T eF = ex * Fx + ey * Fy + ez * Fz;
+  const T cF = (s.xa - s.ya) * eF;
   y[0] += cF * ex + s.ya * Fx;
   y[1] += cF * ey + s.ya * Fy;
   y[2] += cF * ez + s.ya * Fz;
   if constexpr (M == Moments::F) return;
   else {
-    const double Tx = x[3], Ty = x[4], Tz = x[5];
-    const double eT = ex * Tx + ey * Ty + ez * Tz;
-    const double Txe_x = Ty * ez - Tz * ey, Txe_y = Tz * ex - Tx * ez, Txe_z = Tx * ey - Ty * ex;
-    const double Fxe_x = Fy * ez - Fz * ey, Fxe_y = Fz * ex - Fx * ez, Fxe_z = Fx * ey - Fy * ex;
-    const double cT = (s.xc - s.yc) * eT;
+    const T Tx = x[3], Ty = x[4], Tz = x[5];
+    const T eT = ex * Tx + ey * Ty + ez * Tz;
+    const T Txe_x = Ty * ez - Tz * ey, Txe_y = Tz * ex - Tx * ez, Txe_z = Tx * ey - Ty * ex;
+    const T Fxe_x = Fy * ez - Fz * ey, Fxe_y = Fz * ex - Fx * ez, Fxe_z = Fx * ey - Fy * ex;
+    const T cT = (s.xc - s.yc) * eT;
     y[0] += s.ybt * Txe_x;
     y[1] += s.ybt * Txe_y;
     y[2] += s.ybt * Txe_z;
@@ -225,28 +227,28 @@ STOKESIAN_RS_INLINE void apply_block(const mobility::PairScalars& s, double ex, 
     y[5] += s.yb * Fxe_z + cT * ez + s.yc * Tz;
     if constexpr (M == Moments::FT) return;
     else {
-      const double s0 = x[6], s1 = x[7], s2 = x[8], s3 = x[9], s4 = x[10];
-      const double Sxx = kR2 * s0 - kR6 * s1, Syy = -kR2 * s0 - kR6 * s1, Szz = 2.0 * kR6 * s1;
-      const double Sxy = kR2 * s2, Sxz = kR2 * s3, Syz = kR2 * s4;
-      const double Sex = Sxx * ex + Sxy * ey + Sxz * ez, Sey = Sxy * ex + Syy * ey + Syz * ez,
+      const T s0 = x[6], s1 = x[7], s2 = x[8], s3 = x[9], s4 = x[10];
+      const T Sxx = kR2 * s0 - kR6 * s1, Syy = -kR2 * s0 - kR6 * s1, Szz = 2.0 * kR6 * s1;
+      const T Sxy = kR2 * s2, Sxz = kR2 * s3, Syz = kR2 * s4;
+      const T Sex = Sxx * ex + Sxy * ey + Sxz * ez, Sey = Sxy * ex + Syy * ey + Syz * ez,
                    Sez = Sxz * ex + Syz * ey + Szz * ez;
-      const double eSe = ex * Sex + ey * Sey + ez * Sez;
-      const double cU = (s.xgt - 2.0 * s.ygt) * eSe, g2 = 2.0 * s.ygt;
+      const T eSe = ex * Sex + ey * Sey + ez * Sez;
+      const T cU = (s.xgt - 2.0 * s.ygt) * eSe, g2 = 2.0 * s.ygt;
       y[0] += cU * ex + g2 * Sex;
       y[1] += cU * ey + g2 * Sey;
       y[2] += cU * ez + g2 * Sez;
-      const double h2 = 2.0 * s.yht;
+      const T h2 = 2.0 * s.yht;
       y[3] += h2 * (ey * Sez - ez * Sey);
       y[4] += h2 * (ez * Sex - ex * Sez);
       y[5] += h2 * (ex * Sey - ey * Sex);
       // E = alpha e e + e v^T + v e^T + zm S (+ multiples of I, which the 5-basis drops).
-      const double alpha = (s.xg - 2.0 * s.yg) * eF + (1.5 * s.xm - 2.0 * s.ym + 0.5 * s.zm) * eSe;
-      const double ymz = s.ym - s.zm;
-      const double vx = s.yg * Fx + s.yh * Txe_x + ymz * Sex, vy = s.yg * Fy + s.yh * Txe_y + ymz * Sey,
+      const T alpha = (s.xg - 2.0 * s.yg) * eF + (1.5 * s.xm - 2.0 * s.ym + 0.5 * s.zm) * eSe;
+      const T ymz = s.ym - s.zm;
+      const T vx = s.yg * Fx + s.yh * Txe_x + ymz * Sex, vy = s.yg * Fy + s.yh * Txe_y + ymz * Sey,
                    vz = s.yg * Fz + s.yh * Txe_z + ymz * Sez;
-      const double Mxx = alpha * ex * ex + 2.0 * ex * vx, Myy = alpha * ey * ey + 2.0 * ey * vy,
+      const T Mxx = alpha * ex * ex + 2.0 * ex * vx, Myy = alpha * ey * ey + 2.0 * ey * vy,
                    Mzz = alpha * ez * ez + 2.0 * ez * vz;
-      const double Mxy = alpha * ex * ey + ex * vy + vx * ey, Mxz = alpha * ex * ez + ex * vz + vx * ez,
+      const T Mxy = alpha * ex * ey + ex * vy + vx * ey, Mxz = alpha * ex * ez + ex * vz + vx * ez,
                    Myz = alpha * ey * ez + ey * vz + vy * ez;
       y[6] += kR2 * (Mxx - Myy) + s.zm * s0;
       y[7] += kR6 * (2.0 * Mzz - Mxx - Myy) + s.zm * s1;
@@ -256,6 +258,18 @@ STOKESIAN_RS_INLINE void apply_block(const mobility::PairScalars& s, double ex, 
     }
   }
 }
+
+template <Moments M>
+STOKESIAN_RS_INLINE void apply_block(const mobility::PairScalars& s, double ex, double ey, double ez, const double* x, double* y) {
+  apply_block_t<M, double>(s, ex, ey, ez, x, y);
+}
+
+// Four doubles in a register (natural alignment, locals only) and four entries' pair scalars.
+typedef double v4a __attribute__((vector_size(32)));
+struct PairScalars4 {
+  v4a xa, ya, yb, ybt, xc, yc, xg, yg, xgt, ygt, yh, yht, xm, ym, zm;
+};
+STOKESIAN_RS_INLINE void load4(const double* p, v4a* out) { __builtin_memcpy(out, p, sizeof(v4a)); }
 
 }  // namespace
 
@@ -781,6 +795,29 @@ STOKESIAN_RS_INLINE mobility::PairScalars load(const double* c, long stride) {
   }
   return s;
 }
+// The scalars of the four entries of a cache group (entry l's scalar q at c[4 q + l]).
+template <Moments M>
+STOKESIAN_RS_INLINE void load_group(const double* c, PairScalars4& s) {
+  load4(c, &s.xa);
+  load4(c + 4, &s.ya);
+  if constexpr (M != Moments::F) {
+    load4(c + 8, &s.yb);
+    load4(c + 12, &s.ybt);
+    load4(c + 16, &s.xc);
+    load4(c + 20, &s.yc);
+  }
+  if constexpr (M == Moments::FTS) {
+    load4(c + 24, &s.xg);
+    load4(c + 28, &s.yg);
+    load4(c + 32, &s.xgt);
+    load4(c + 36, &s.ygt);
+    load4(c + 40, &s.yh);
+    s.yht = s.yh;
+    load4(c + 44, &s.xm);
+    load4(c + 48, &s.ym);
+    load4(c + 52, &s.zm);
+  }
+}
 }  // namespace
 
 template <Moments M>
@@ -846,10 +883,10 @@ STOKESIAN_RS_INLINE void RealSpaceSum::fill_row(long k) {
   if (direct_) {
     const ClassTable* ct = class_tables_.data() + cls_[k] * classes_.size();
     for (long t = row_[k]; t < row_[k + 1]; ++t)
-      store<M>(direct_scalars<M>(ct[cls_[nbr_[t]]], dist_[t]), cache_.data() + t * rec, 1);
+      store<M>(direct_scalars<M>(ct[cls_[nbr_[t]]], dist_[t]), cache_.data() + (t & ~3L) * rec + (t & 3), 4);
   } else {
     for (long t = row_[k]; t < row_[k + 1]; ++t)
-      store<M>(table_scalars<M>(a2s_[k], a2s_[nbr_[t]], dist_[t]), cache_.data() + t * rec, 1);
+      store<M>(table_scalars<M>(a2s_[k], a2s_[nbr_[t]], dist_[t]), cache_.data() + (t & ~3L) * rec + (t & 3), 4);
   }
 }
 
@@ -864,11 +901,44 @@ STOKESIAN_RS_INLINE void RealSpaceSum::row(long k, const double* xs, double* ys)
   if constexpr (d > 6)
     for (int c = 6; c < 11; ++c) y[c] = self_s_[k] * xk[c];
   if (!cache_.empty()) {
+    // Cache groups of four consecutive entries (fill_cache): the row's entries before its first
+    // whole group and after its last one one at a time, the whole groups four at a time, their
+    // lanes summed at the end of the row.
     constexpr int rec = cached_scalars(M);
-    for (long t = row_[k]; t < row_[k + 1]; ++t) {
-      const double* c = cache_.data() + t * rec;
-      apply_block<M>(load<M>(c, 1), ex_[t], ey_[t], ez_[t], xs + std::size_t(nbr_[t]) * d, y);
+    const long t1 = row_[k + 1];
+    long t = row_[k];
+    auto one = [&](long e) {
+      apply_block<M>(load<M>(cache_.data() + (e & ~3L) * rec + (e & 3), 4), ex_[e], ey_[e], ez_[e],
+                     xs + std::size_t(nbr_[e]) * d, y);
+    };
+    for (; t < t1 && (t & 3); ++t) one(t);
+    if (t + 4 <= t1) {
+      v4a acc[d];
+      for (int c = 0; c < d; ++c) acc[c] = v4a{0.0, 0.0, 0.0, 0.0};
+      for (; t + 4 <= t1; t += 4) {
+        PairScalars4 s{};
+        load_group<M>(cache_.data() + t * rec, s);
+        v4a ex, ey, ez, xv[d];
+        load4(ex_.data() + t, &ex);
+        load4(ey_.data() + t, &ey);
+        load4(ez_.data() + t, &ez);
+        const double* x0 = xs + std::size_t(nbr_[t]) * d;
+        const double* x1 = xs + std::size_t(nbr_[t + 1]) * d;
+        const double* x2 = xs + std::size_t(nbr_[t + 2]) * d;
+        const double* x3 = xs + std::size_t(nbr_[t + 3]) * d;
+        alignas(32) double g[4 * d];  // the four sources' inputs, transposed
+        for (int c = 0; c < d; ++c) {
+          g[4 * c] = x0[c];
+          g[4 * c + 1] = x1[c];
+          g[4 * c + 2] = x2[c];
+          g[4 * c + 3] = x3[c];
+        }
+        __builtin_memcpy(xv, g, sizeof(xv));
+        apply_block_t<M, v4a>(s, ex, ey, ez, xv, acc);
+      }
+      for (int c = 0; c < d; ++c) y[c] += (acc[c][0] + acc[c][1]) + (acc[c][2] + acc[c][3]);
     }
+    for (; t < t1; ++t) one(t);
   } else if (direct_ && classes_.size() == 1) {
     // One radius: no class lookup per entry (F 12.3 against 14.3-15.3 ns per pair with it).
     const ClassTable& ct = class_tables_[0];
@@ -911,7 +981,9 @@ void RealSpaceSum::fill_base(long k0, long k1) {
 
 template <Moments M>
 void RealSpaceSum::fill_cache() {
-  cache_.resize(std::size_t(row_[n_]) * cached_scalars(M));  // every entry is written below
+  // Groups of four consecutive entries t (not aligned to rows), each scalar four-wide: entry t's
+  // scalar q at (t & ~3) rec + 4 q + (t & 3). Every entry is written below.
+  cache_.resize(std::size_t((row_[n_] + 3) & ~3L) * cached_scalars(M));
   const bool avx = use_avx2();
   constexpr long chunk = 64;
 #pragma omp parallel for schedule(dynamic, 1)
