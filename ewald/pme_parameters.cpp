@@ -28,7 +28,9 @@ constexpr double kSafety = 0.7;
 
 // Cost per unit of the model [s] on the reference machine (2-core AMD EPYC VM, one thread), measured
 // 2026-11-24: real-space pairs by bench/bench_pme_real.cpp (with and without the per-entry scalar
-// cache of real_space.hpp, RealSpaceSum::cache_bytes_for per ordered pair, within the budget);
+// cache of real_space.hpp, RealSpaceSum::cache_bytes_for per ordered pair, within the budget; the
+// cached pairs re-measured 2026-11-29 with the four-wide groups: 2.6-3.4 / 7.5-8.6 / 18-24 ns for
+// F / FT / FTS at N = 10648, phi 0.1 and 0.4, tol 1e-4 and 1e-6);
 // window points (spread + interpolate, per particle and P^3) and transforms by timing apply_wave
 // at fixed parameters over grids 32^3-192^3 and P = 4-12 (N = 10^4, phi = 0.4).
 // Uncached pairs read the pair scalars from tables per pair of radii when there are at most four
@@ -44,9 +46,9 @@ struct CostConstants {
 };
 CostConstants cost_constants(Moments m) {
   switch (m) {
-    case Moments::F: return {4e-9, 18e-9, 2.5e-9};
-    case Moments::FT: return {10e-9, 44e-9, 5.0e-9};
-    default: return {32e-9, 75e-9, 5.5e-9};
+    case Moments::F: return {3e-9, 18e-9, 2.5e-9};
+    case Moments::FT: return {8e-9, 44e-9, 5.0e-9};
+    default: return {20e-9, 75e-9, 5.5e-9};
   }
 }
 constexpr double kFft = 0.25e-9;  // per point and log2(points), one 3D field, forward or backward

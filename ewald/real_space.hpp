@@ -48,8 +48,10 @@
 // comes from the cell image, equal to the minimum image within rounding. The scalars of the
 // separated entries are kept per entry (one record per entry) when they fit in cache_bytes
 // (default 256 MB: 16, 48 or 112 bytes per ordered pair for F, FT, FTS); repeated products then
-// only read them. Measured on one core (bench/bench_pme_real.cpp, bench/results/pme_real.json):
-// about 4 / 10 / 32 ns per pair (F / FT / FTS) with the cache, 18 / 44 / 75 without; without the
+// only read them, four entries at a time (the cache holds groups of four consecutive entries, each
+// scalar four-wide, and a row's whole groups go through one vector evaluation of the block formula).
+// Measured on one core (bench/bench_pme_real.cpp, bench/results/pme_real.json): about 3 / 8 / 20 ns
+// per pair (F / FT / FTS) with the cache (4 / 10 / 32 one entry at a time), 18 / 44 / 75 without; without the
 // cache, equal radii (per-class tables) take 0.65 / 0.59 / 0.77 of that (12.4 / 24 / 56 against 19 / 41 / 72 ns on a
 // slower day, N = 10648, phi 0.1, tol 1e-4; not priced by the cost model, pme_parameters.cpp).
 // The per-class tables cost more to build (FTS, one thread: one radius 0.008 / 0.056 s at tol
