@@ -38,9 +38,9 @@ void SymmetricBlockMatrix::reset(long n, int d, const std::vector<char>& diagona
     while (i < n && start_[std::size_t(i)] < target) ++i;
     slice_[std::size_t(c)] = i;
   }
-  long buf = 0;
-  for (int c = 0; c < kChunks; ++c) buf += (n - slice_[std::size_t(c)]) * d;
-  buffer_.resize(std::size_t(buf));
+  offset_.assign(kChunks + 1, 0);
+  for (int c = 0; c < kChunks; ++c) offset_[std::size_t(c) + 1] = offset_[std::size_t(c)] + (n - slice_[std::size_t(c)]) * d;
+  buffer_.resize(std::size_t(offset_[kChunks]));
 }
 
 long SymmetricBlockMatrix::find(long i, long j) const {
@@ -59,10 +59,9 @@ void SymmetricBlockMatrix::multiply(const VecX& x, VecX& y) const {
   const long N = n_ * d_;
   if (x.size() != N) throw std::invalid_argument("SymmetricBlockMatrix::multiply: size mismatch");
   y.resize(N);
+  if (N == 0) return;  // also a matrix never reset
   const int d = d_;
   const long dd = long(d) * d;
-  std::vector<long> offset(kChunks + 1, 0);  // buffer of slice c: rows [slice_[c] d, N)
-  for (int c = 0; c < kChunks; ++c) offset[std::size_t(c) + 1] = offset[std::size_t(c)] + (n_ - slice_[std::size_t(c)]) * d;
   const double* xv = x.data();
   double* yv = y.data();
 #pragma omp parallel
@@ -70,7 +69,7 @@ void SymmetricBlockMatrix::multiply(const VecX& x, VecX& y) const {
 #pragma omp for schedule(dynamic, 1)
     for (int c = 0; c < kChunks; ++c) {
       const long r0 = slice_[std::size_t(c)], r1 = slice_[std::size_t(c) + 1];
-      double* t = buffer_.data() + offset[std::size_t(c)] - r0 * d;  // t[row] for rows >= r0 d
+      double* t = buffer_.data() + offset_[std::size_t(c)] - r0 * d;  // t[row] for rows >= r0 d
       std::fill(t + r0 * d, t + N, 0.0);
       double yi[11];
       for (long i = r0; i < r1; ++i) {
@@ -104,7 +103,7 @@ void SymmetricBlockMatrix::multiply(const VecX& x, VecX& y) const {
       double s = yv[k];
       for (int c = 0; c < kChunks; ++c) {
         const long lo = slice_[std::size_t(c)] * d;
-        if (k >= lo) s += buffer_[std::size_t(offset[std::size_t(c)] + k - lo)];
+        if (k >= lo) s += buffer_[std::size_t(offset_[std::size_t(c)] + k - lo)];
       }
       yv[k] = s;
     }

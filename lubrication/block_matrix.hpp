@@ -53,7 +53,10 @@ class SymmetricBlockMatrix {
   std::vector<int> col_;      // block column of every stored block
   std::vector<double> val_;   // d^2 values per stored block
   std::vector<long> slice_;   // kChunks + 1 block-row boundaries
-  mutable std::vector<double> buffer_;  // transposed parts, one range [slice start, n) d per slice
+  std::vector<long> offset_;  // kChunks + 1 starts of the slices' ranges in buffer_
+  // Transposed parts, one range [slice start, n) d per slice; multiply() is therefore not safe to
+  // call concurrently on one matrix.
+  mutable std::vector<double> buffer_;
 };
 
 }  // namespace stokesian::lubrication

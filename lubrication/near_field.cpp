@@ -118,6 +118,24 @@ MatX NearField::pair_block_reference(const Vec3& r_vec_in, double ai, double aj)
   return Rex - Rinf;
 }
 
+NearField::WeightedPairs NearField::weighted_pairs(const std::vector<Vec3>& x, const std::vector<double>& a,
+                                                  const Domain& domain) const {
+  WeightedPairs wp;
+  const double amax = *std::max_element(a.begin(), a.end());
+  // exact tables for few distinct size ratios, interpolated in ln(lambda) otherwise
+  if (p_.model == Lubrication::exact) tables_.prepare_radii(a);
+  wp.pairs = trees::neighbor_pairs(x, a, domain, (p_.cutoff - 2.0) * amax);
+  for (std::size_t k = 0; k < wp.pairs.size(); ++k) {
+    const auto& p = wp.pairs[k];
+    const double w = weight(2.0 * p.dist / (a[std::size_t(p.i)] + a[std::size_t(p.j)]));
+    if (w > 0.0) {
+      wp.in.push_back(k);
+      wp.w.push_back(w);
+    }
+  }
+  return wp;
+}
+
 SparseMatrix NearField::assemble(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain,
                                  NearFieldStats* stats) const {
   SymmetricBlockMatrix R;
@@ -129,26 +147,16 @@ void NearField::assemble(const std::vector<Vec3>& x, const std::vector<double>& 
                          SymmetricBlockMatrix& R, NearFieldStats* stats) const {
   const int d = dof_per_particle(m_);
   const long dd = long(d) * d;
-  const double amax = *std::max_element(a.begin(), a.end());
-  // exact tables for few distinct size ratios, interpolated in ln(lambda) otherwise
-  if (p_.model == Lubrication::exact) tables_.prepare_radii(a);
-  const auto pairs = trees::neighbor_pairs(x, a, domain, (p_.cutoff - 2.0) * amax);
+  const WeightedPairs wp = weighted_pairs(x, a, domain);
+  const auto& pairs = wp.pairs;
+  const auto& in = wp.in;
+  const auto& wt = wp.w;
   // The block pattern first (block_matrix.hpp: diagonal, then the upper partners ascending), then
   // the pair blocks in parallel, a chunk of pairs at a time: the off-diagonal block straight into its
   // place, the two diagonal parts into a chunk buffer whose parts each particle then adds in pair
   // order (the same sums for any thread count). The peak memory is the matrix plus 2 d^2 doubles per
   // pair of one chunk.
   const long n = long(x.size());
-  std::vector<std::size_t> in;  // pairs with a non-zero weight, in pair order
-  std::vector<double> wt;
-  for (std::size_t k = 0; k < pairs.size(); ++k) {
-    const auto& p = pairs[k];
-    const double w = weight(2.0 * p.dist / (a[std::size_t(p.i)] + a[std::size_t(p.j)]));
-    if (w > 0.0) {
-      in.push_back(k);
-      wt.push_back(w);
-    }
-  }
   std::vector<std::vector<int>> upper(static_cast<std::size_t>(n));
   std::vector<char> has_pair(static_cast<std::size_t>(n), 0);
   for (std::size_t k : in) {
@@ -264,20 +272,11 @@ VecX NearField::brownian_force(const std::vector<Vec3>& x, const std::vector<dou
   if (long(given.size()) != n * d) throw std::invalid_argument("NearField::brownian_force: `given` needs d N flags");
   VecX f = VecX::Zero(n * d);
   if (n < 2) return f;
-  const double amax = *std::max_element(a.begin(), a.end());
-  if (p_.model == Lubrication::exact) tables_.prepare_radii(a);
   // The same pairs, weights and order as assemble().
-  const auto pairs = trees::neighbor_pairs(x, a, domain, (p_.cutoff - 2.0) * amax);
-  std::vector<std::size_t> in;
-  std::vector<double> wt;
-  for (std::size_t k = 0; k < pairs.size(); ++k) {
-    const auto& p = pairs[k];
-    const double w = weight(2.0 * p.dist / (a[std::size_t(p.i)] + a[std::size_t(p.j)]));
-    if (w > 0.0) {
-      in.push_back(k);
-      wt.push_back(w);
-    }
-  }
+  const WeightedPairs wp = weighted_pairs(x, a, domain);
+  const auto& pairs = wp.pairs;
+  const auto& in = wp.in;
+  const auto& wt = wp.w;
   const std::size_t stride = std::size_t(2 * d);
   std::vector<double> out(in.size() * stride, 0.0);  // each pair's force on its 2 d entries
   std::vector<double> worst_pivot(in.size(), 0.0);    // most negative relative pivot per pair

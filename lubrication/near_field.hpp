@@ -26,6 +26,7 @@
 #include "lubrication/far_pair_inverse.hpp"
 #include "lubrication/resistance_table.hpp"
 #include "lubrication/squeeze.hpp"
+#include "trees/neighbor_list.hpp"
 
 #include <vector>
 
@@ -109,6 +110,15 @@ class NearField {
   Moments moments() const { return m_; }
 
  private:
+  // The pairs inside the cutoff with a non-zero switch, in the pair order of trees::neighbor_pairs
+  // (the order assemble() and brownian_force() share), with their weights; prepares the tables.
+  struct WeightedPairs {
+    std::vector<trees::NeighborPair> pairs;
+    std::vector<std::size_t> in;  // indices into pairs
+    std::vector<double> w;        // w(s) of pairs[in[m]]
+  };
+  WeightedPairs weighted_pairs(const std::vector<Vec3>& x, const std::vector<double>& a, const Domain& domain) const;
+
   Moments m_;
   double mu_;
   NearFieldParams p_;
