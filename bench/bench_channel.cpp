@@ -10,11 +10,14 @@
 // solver dense (N <= 500) and accelerated (all N), PME far field. One step = evaluate at x0 (what
 // Simulation::run does) + advance; the first step (set-up) is not timed, then `steps` steps are
 // averaged.
-// Rows: solver (0 dense, 1 accelerated), N, fraction, N_I, threads; phases: seconds (per step).
-// The plot script fits exponents per solver and fraction and the speed-up from the constraint
-// (time at fraction 1 over time at fraction f, same N).
+// Dense SD also runs the same scenes without the shear ("still": Brownian only), where the held
+// particles' far-field block stays the same from one configuration to the next and its factor is
+// kept (engine/sd_dense.hpp); under shear the Lees-Edwards strain changes it at every stage.
+// Rows: solver (0 dense, 1 accelerated), N, fraction, N_I, threads, shear (1 sheared, 0 still);
+// phases: seconds (per step). The plot script fits exponents per solver, shear and fraction and
+// the speed-up from the constraint (time at fraction 1 over time at fraction f, same N).
 // Usage: bench_channel [--quick] [--out DIR]; full: N = 100 ... 10000 (dense to 500), 3 steps;
-// --quick: N = 60, 150, 1 step.
+// --quick: N = 60, 150, 1 step. BENCH_SOLVERS=dense (or accelerated) runs one solver only.
 #include "bench/harness.hpp"
 #include "engine/simulation.hpp"
 #include "io/scene_toml.hpp"
@@ -24,20 +27,21 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <sstream>
 
 using namespace stokesian;
 
 namespace {
 
-Scene make_scene(long n, double fraction, const std::string& solver) {
+Scene make_scene(long n, double fraction, const std::string& solver, bool shear) {
   const double L = std::cbrt(double(n) * 4.0 / 3.0 * kPi / 0.2);
   std::ostringstream o;
   o.precision(10);
   o << "[domain]\nkind = \"periodic\"\nbox = [" << L << ", " << L << ", " << L << "]\n"
     << "[fluid]\nkT = 1.0\n[particles]\ngenerate = \"random\"\ncount = " << n << "\nseed = 5\n"
     << "[[forces.pair]]\nkind = \"hertz\"\nstiffness = 20000.0\n"
-    << "[flow]\nkind = \"simple_shear\"\npeclet = 1.0\n"
+    << (shear ? "[flow]\nkind = \"simple_shear\"\npeclet = 1.0\n" : "")
     << "[hydrodynamics]\nmodel = \"stokesian\"\nsolver = \"" << solver << "\"\nmoments = \"FT\"\ntolerance = 1e-3\n"
     << "[brownian]\nstress_every = 0\n[time]\ndt = 1e-4\nsteps = 100\n";
   Scene s = io::parse_scene(o.str(), "bench_channel.toml");
@@ -51,13 +55,21 @@ Scene make_scene(long n, double fraction, const std::string& solver) {
 int main(int argc, char** argv) {
   const bench::Options opt = bench::parse_options(argc, argv);
   bench::Results res(opt.quick ? "channel_quick" : "channel");
-  const std::vector<long> sizes = opt.quick ? std::vector<long>{60, 150} : std::vector<long>{100, 300, 1000, 3000, 10000};
+  const std::vector<long> sizes = opt.quick ? std::vector<long>{60, 150} : std::vector<long>{100, 300, 500, 1000, 3000, 10000};
   const int steps = opt.quick ? 1 : 3;
-  for (const char* solver : {"dense", "accelerated"})
+  const char* only = std::getenv("BENCH_SOLVERS");
+  struct Series {
+    const char* solver;
+    bool shear;
+  };
+  for (const Series& se : {Series{"dense", true}, Series{"dense", false}, Series{"accelerated", true}}) {
+    const std::string solver = se.solver;
+    if (only && solver != only) continue;
     for (long n : sizes) {
-      if (std::string(solver) == "dense" && n > 500) continue;  // the dense solver's limit
+      if (solver == "dense" && n > 500) continue;   // the dense solver's limit
+      if (solver == "accelerated" && n == 500) continue;
       for (double f : {1.0, 0.1, 0.01}) {
-        const Scene scene = make_scene(n, f, solver);
+        const Scene scene = make_scene(n, f, solver, se.shear);
         Simulation sim(scene);
         State s = sim.initial_state();
         {
@@ -72,13 +84,15 @@ int main(int argc, char** argv) {
         const double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / steps;
         long ni = 0;
         for (char c : scene.fixed) ni += c == 0;
-        std::printf("%-11s N %5ld  interior fraction %.2f (N_I %5ld): %.4f s per step\n", solver, n, f, ni, sec);
+        std::printf("%-11s %-7s N %5ld  interior fraction %.2f (N_I %5ld): %.4f s per step\n", se.solver,
+                    se.shear ? "sheared" : "still", n, f, ni, sec);
         std::fflush(stdout);
-        res.add({{"solver", std::string(solver) == "dense" ? 0.0 : 1.0}, {"N", double(n)}, {"fraction", f},
-                 {"N_I", double(ni)}, {"threads", double(omp_get_max_threads())}},
+        res.add({{"solver", solver == "dense" ? 0.0 : 1.0}, {"N", double(n)}, {"fraction", f}, {"N_I", double(ni)},
+                 {"threads", double(omp_get_max_threads())}, {"shear", se.shear ? 1.0 : 0.0}},
                 {{"seconds", sec}});
       }
     }
+  }
   std::printf("wrote %s\n", res.write(opt.out).c_str());
   return 0;
 }

@@ -1,9 +1,10 @@
 #!/usr/bin/python3
 """Chart the constrained-SD cost benchmark (bench/bench_channel.cpp, issue 17; Lee et al. 2024
 fig. 6): (a) wall time per Brownian SD step against N for the dense and the accelerated solver at
-interior fractions 1, 0.1, 0.01, with the exponent of a least-squares fit of log t against log N;
-(b) the speed-up from the constraint, t(fraction 1) / t(fraction f) at the same N. Prints the table
-of docs/channels.md.
+interior fractions 1, 0.1, 0.01 in simple shear (as [L24]), and for the dense solver also without
+the shear ("still", where the held block's factor is kept), with the exponent of a least-squares
+fit of log t against log N; (b) the speed-up from the constraint, t(fraction 1) / t(fraction f) at
+the same N. Prints the table of docs/channels.md.
 
 usage: plot_channel.py [RESULTS.json] [OUT.png]   (default bench/results/channel.json)
 """
@@ -18,14 +19,21 @@ import numpy as np
 src = sys.argv[1] if len(sys.argv) > 1 else "bench/results/channel.json"
 out = sys.argv[2] if len(sys.argv) > 2 else src.replace(".json", ".png")
 rows = json.load(open(src))["rows"]
-names = {0: "dense SD", 1: "accelerated SD"}
+names = {(0, 1): "dense SD", (0, 0): "dense SD, still", (1, 1): "accelerated SD"}
+styles = ((0, 1, "s", "--"), (0, 0, "D", ":"), (1, 1, "o", "-"))
+
+
+def series(r):
+    return (int(r["params"]["solver"]), int(r["params"].get("shear", 1)))
+
 fracs = sorted({r["params"]["fraction"] for r in rows}, reverse=True)
 
 fig, ax = plt.subplots(1, 2, figsize=(12, 4.8))
 table = {}
-for s, marker, ls in ((0, "s", "--"), (1, "o", "-")):
+for solver, shear, marker, ls in styles:
+    s = (solver, shear)
     for k, f in enumerate(fracs):
-        pts = sorted([r for r in rows if r["params"]["solver"] == s and r["params"]["fraction"] == f],
+        pts = sorted([r for r in rows if series(r) == s and r["params"]["fraction"] == f],
                      key=lambda r: r["params"]["N"])
         if not pts:
             continue
@@ -39,12 +47,13 @@ for s, marker, ls in ((0, "s", "--"), (1, "o", "-")):
                      label=f"{names[s]}, N_I/N = {f:g} (slope {slope:.2f})")
 ax[0].set_xlabel("N = N_I + N_W")
 ax[0].set_ylabel("wall time per Brownian step [s]")
-ax[0].set_title("(a) constrained SD, φ = 0.2, Pe = 1, FT, tol 1e-3")
+ax[0].set_title("(a) constrained SD, φ = 0.2, Pe = 1 (still: 0), FT, tol 1e-3")
 ax[0].legend(fontsize=8)
 ax[0].grid(alpha=0.3, which="both")
 
 print("solver, N, t(1) s, speed-up at 0.1, at 0.01")
-for s, marker, ls in ((0, "s", "--"), (1, "o", "-")):
+for solver, shear, marker, ls in styles:
+    s = (solver, shear)
     for k, f in enumerate(fracs[1:], start=1):
         ns = sorted({N for (ss, ff, N) in table if ss == s and ff == f and (s, 1.0, N) in table})
         if not ns:
@@ -53,7 +62,7 @@ for s, marker, ls in ((0, "s", "--"), (1, "o", "-")):
                        label=f"{names[s]}, N_I/N = {f:g}")
     for N in sorted({N for (ss, ff, N) in table if ss == s and ff == 1.0}):
         sp = [table[(s, 1.0, N)] / table[(s, f, N)] if (s, f, N) in table else float("nan") for f in fracs[1:]]
-        print(f"  {names[s]:15s} {N:6d} {table[(s, 1.0, N)]:.3g} " + " ".join(f"{v:.2f}" for v in sp))
+        print(f"  {names[s]:17s} {N:6d} {table[(s, 1.0, N)]:.3g} " + " ".join(f"{v:.2f}" for v in sp))
 ax[1].axhline(1.0, color="0.6", lw=0.8)
 ax[1].set_xlabel("N")
 ax[1].set_ylabel("t(N_I/N = 1) / t(N_I/N)")

@@ -17,6 +17,12 @@ void dpotrf_(const char* uplo, const int* n, double* a, const int* lda, int* inf
 void dpotri_(const char* uplo, const int* n, double* a, const int* lda, int* info, std::size_t);
 void dpotrs_(const char* uplo, const int* n, const int* nrhs, const double* a, const int* lda, double* b,
              const int* ldb, int* info, std::size_t);
+// BLAS.
+void dtrsm_(const char* side, const char* uplo, const char* transa, const char* diag, const int* m, const int* n,
+            const double* alpha, const double* a, const int* lda, double* b, const int* ldb, std::size_t, std::size_t,
+            std::size_t, std::size_t);
+void dsyrk_(const char* uplo, const char* trans, const int* n, const int* k, const double* alpha, const double* a,
+            const int* lda, const double* beta, double* c, const int* ldc, std::size_t, std::size_t);
 }
 
 namespace stokesian {
@@ -43,6 +49,18 @@ int potri(MatX& A) {
   int info = 0;
   if (n > 0) dpotri_("L", &n, A.data(), &n, &info, 1);
   return info;
+}
+// W <- L^{-1} W (L lower triangular, W with L.rows() rows).
+void trsm_lower(const MatX& L, MatX& W) {
+  const int m = dim(W.rows()), k = dim(W.cols());
+  const double one = 1.0;
+  if (m > 0 && k > 0) dtrsm_("L", "L", "N", "N", &m, &k, &one, L.data(), &m, W.data(), &m, 1, 1, 1, 1);
+}
+// Lower triangle of C <- C - W^T W.
+void syrk_minus(const MatX& W, MatX& C) {
+  const int n = dim(C.rows()), k = dim(W.rows());
+  const double minus = -1.0, one = 1.0;
+  if (n > 0 && k > 0) dsyrk_("L", "T", &n, &k, &minus, W.data(), &k, &one, C.data(), &n, 1, 1);
 }
 // x <- (L L^T)^{-1} x.
 void potrs(const MatX& L, VecX& x) {
@@ -114,11 +132,59 @@ void DenseStokesianDynamics::prepare(const Configuration& c) {
   if (reference_) select_reference_operator(c.domain);
   op_->set_configuration(c);
   config_.store(c);
-  const MatX* M = op_->dense();
-  if (!M) throw std::logic_error(std::string("dense Stokesian dynamics needs a dense far field, not \"") + op_->name() + "\"");
+  M_ = nullptr;  // formed when the factorisation needs it (full_mobility), or only its mobile rows
   have_Rvv_ = have_R_ = false;
+  factor_ = Factor::none;
+  // Near field, symmetrised (added to the force/torque block when the far field is factored).
+  stats_ = {};
+  const auto N = near_.assemble(c.x, c.a, c.domain, &stats_);
+  Rnf_ = 0.5 * (N + SparseMat(N.transpose()));
+}
+
+const MatX& DenseStokesianDynamics::full_mobility() const {
+  if (!M_) M_ = op_->dense();
+  if (!M_) throw std::logic_error(std::string("dense Stokesian dynamics needs a dense far field, not \"") + op_->name() + "\"");
+  return *M_;
+}
+
+void DenseStokesianDynamics::far_field_not_positive_definite() const {
+  const long e = first_failing_entry(full_mobility());
+  throw PhysicsError("far-field mobility is not positive definite: its Cholesky factorisation fails at " +
+                     (e >= 0 ? failing_particles(e / dof_per_particle(m_), Configuration{config_.x, config_.a, config_.domain}) : std::string("an unknown entry")));
+}
+
+void DenseStokesianDynamics::factor(const std::vector<char>& fixed) {
+  const std::size_t np = config_.x.size();
+  std::vector<char> held(np, 0);
+  bool any = false;
+  if (held_blocks_ && !fixed.empty())
+    for (std::size_t i = 0; i < np; ++i)
+      if (fixed[i]) held[i] = 1, any = true;
+  if (factor_ != Factor::none && held == factor_held_) return;
+  have_Rvv_ = have_R_ = false;
+  reused_held_ = false;
+  if (any) factor_blocks(held);
+  else factor_full();
+  factor_held_ = std::move(held);
+}
+
+void DenseStokesianDynamics::add_near_field_tt() {
+  const long nt = Rtt_.rows();
+#pragma omp parallel for schedule(static)
+  for (long col = 0; col < nt; ++col)  // mirror the lower triangle dpotri wrote
+    for (long r = 0; r < col; ++r) Rtt_(r, col) = Rtt_(col, r);
+  for (int k = 0; k < Rnf_.outerSize(); ++k)
+    for (SparseMat::InnerIterator it(Rnf_, k); it; ++it) {
+      const long pr = pos_[std::size_t(it.row())], pq = pos_[std::size_t(it.col())];
+      if (pr < n0_ || pq < n0_) continue;  // outside the order, or a stresslet row
+      Rtt_(pr - n0_, pq - n0_) += it.value();
+    }
+}
+
+void DenseStokesianDynamics::factor_full() {
+  const MatX& M = full_mobility();
   const int d = dof_per_particle(m_);
-  const long n = long(M->rows()), np = n / d;
+  const long n = long(M.rows()), np = n / d;
   // Factored order: the stresslet entries of every particle, then the force/torque entries.
   perm_.clear();
   if (d > 6)
@@ -132,57 +198,139 @@ void DenseStokesianDynamics::prepare(const Configuration& c) {
   L_.resize(n, n);
 #pragma omp parallel for schedule(static)
   for (long col = 0; col < n; ++col) {
-    const double* src = M->data() + perm_[std::size_t(col)] * n;
+    const double* src = M.data() + perm_[std::size_t(col)] * n;
     double* dst = L_.data() + col * n;
     for (long r = col; r < n; ++r) dst[r] = src[perm_[std::size_t(r)]];
   }
-  if (lapack::potrf(L_) != 0) {
-    const long e = first_failing_entry(*M);
-    throw PhysicsError("far-field mobility is not positive definite: its Cholesky factorisation fails at " +
-                       (e >= 0 ? failing_particles(e / dof_per_particle(m_), c) : std::string("an unknown entry")));
-  }
+  if (lapack::potrf(L_) != 0) far_field_not_positive_definite();
   const long nt = n - n0_;
   Rtt_ = L_.bottomRightCorner(nt, nt);
   if (lapack::potri(Rtt_) != 0) throw std::logic_error("dense SD: dpotri failed on a factored far-field block");
-  // Near field, symmetrised, added to the force/torque block.
-  stats_ = {};
-  const auto N = near_.assemble(c.x, c.a, c.domain, &stats_);
-  Rnf_ = 0.5 * (N + SparseMat(N.transpose()));
+  add_near_field_tt();
+  factor_ = Factor::full;
+}
+
+void DenseStokesianDynamics::factor_blocks(const std::vector<char>& held) {
+  const int d = dof_per_particle(m_);
+  const long np = long(config_.x.size()), n = np * d;
+  // Mobile entries: stresslets first, then forces/torques (as the full order); held entries by particle.
+  perm_.clear();
+  if (d > 6)
+    for (long i = 0; i < np; ++i)
+      if (!held[std::size_t(i)])
+        for (int k = 6; k < d; ++k) perm_.push_back(i * d + k);
+  n0_ = long(perm_.size());
+  for (long i = 0; i < np; ++i)
+    if (!held[std::size_t(i)])
+      for (int k = 0; k < std::min(d, 6); ++k) perm_.push_back(i * d + k);
+  std::vector<long> hs;
+  for (long i = 0; i < np; ++i)
+    if (held[std::size_t(i)])
+      for (int k = 0; k < d; ++k) hs.push_back(i * d + k);
+  const long ni = long(perm_.size()), nh = long(hs.size());
+  pos_.assign(std::size_t(n), -1);
+  for (long r = 0; r < ni; ++r) pos_[std::size_t(perm_[std::size_t(r)])] = r;
+
+  // The held block is kept while the held particles, their radii and the domain are those it was
+  // factored for (the far field's entries are functions of these alone). Then only the mobile
+  // particles' rows of M_inf are formed, when the operator can (dense_rows); otherwise all of it.
+  std::vector<long> mobile, held_ids;
+  for (long i = 0; i < np; ++i) (held[std::size_t(i)] ? held_ids : mobile).push_back(i);
+  std::vector<Vec3> hx;
+  std::vector<double> ha;
+  for (long i : held_ids) hx.push_back(config_.x[std::size_t(i)]), ha.push_back(config_.a[std::size_t(i)]);
+  reused_held_ = held_L_.size() != 0 && held_entries_ == hs && held_x_ == hx && held_a_ == ha &&
+                 held_domain_ == config_.domain;
+  // Entries of M_inf by block rows (dense_rows) when the operator forms them, so that a
+  // configuration's arithmetic does not depend on whether the held factor was kept (a resumed run
+  // repeats the uninterrupted one); otherwise from the whole matrix.
+  MatX mobile_rows;  // (d N_I) x n, row d k + c: entry c of mobile[k]
+  const bool by_rows = op_->dense_rows(mobile, mobile_rows);
+  std::vector<long> mobile_row(std::size_t(n), -1);
+  for (std::size_t k = 0; k < mobile.size(); ++k)
+    for (int c = 0; c < d; ++c) mobile_row[std::size_t(mobile[k] * d + c)] = long(k) * d + c;
+  const MatX* M = by_rows ? nullptr : &full_mobility();
+  const auto entry = [&](long q, long col) {
+    return by_rows ? mobile_rows(mobile_row[std::size_t(q)], col) : (*M)(q, col);
+  };
+  if (!reused_held_) {
+    MatX held_rows;  // (d N_H) x n, in the order of hs
+    if (by_rows) op_->dense_rows(held_ids, held_rows);
+    held_L_.resize(nh, nh);
 #pragma omp parallel for schedule(static)
-  for (long col = 0; col < nt; ++col)  // mirror the lower triangle dpotri wrote
-    for (long r = 0; r < col; ++r) Rtt_(r, col) = Rtt_(col, r);
-  for (int k = 0; k < Rnf_.outerSize(); ++k)
-    for (SparseMat::InnerIterator it(Rnf_, k); it; ++it) {
-      const long r = pos_[std::size_t(it.row())] - n0_, q = pos_[std::size_t(it.col())] - n0_;
-      if (r >= 0 && q >= 0) Rtt_(r, q) += it.value();
-    }
+    for (long col = 0; col < nh; ++col)
+      for (long r = 0; r < nh; ++r)
+        held_L_(r, col) = by_rows ? held_rows(r, hs[std::size_t(col)]) : (*M)(hs[std::size_t(r)], hs[std::size_t(col)]);
+    held_entries_.clear();
+    if (lapack::potrf(held_L_) != 0) far_field_not_positive_definite();
+    held_entries_ = hs;
+    held_x_ = hx;
+    held_a_ = ha;
+    held_domain_ = config_.domain;
+  }
+  // W = L_H^{-1} B^T (n_H x n_I, B = A_IH in the mobile order), S = A_II - W^T W.
+  W_.resize(nh, ni);
+#pragma omp parallel for schedule(static)
+  for (long col = 0; col < ni; ++col)
+    for (long r = 0; r < nh; ++r) W_(r, col) = entry(perm_[std::size_t(col)], hs[std::size_t(r)]);
+  lapack::trsm_lower(held_L_, W_);
+  L_.resize(ni, ni);
+#pragma omp parallel for schedule(static)
+  for (long col = 0; col < ni; ++col)
+    for (long r = col; r < ni; ++r) L_(r, col) = entry(perm_[std::size_t(r)], perm_[std::size_t(col)]);
+  lapack::syrk_minus(W_, L_);
+  if (lapack::potrf(L_) != 0) far_field_not_positive_definite();
+  const long nt = ni - n0_;
+  Rtt_ = L_.bottomRightCorner(nt, nt);
+  if (lapack::potri(Rtt_) != 0) throw std::logic_error("dense SD: dpotri failed on a factored far-field block");
+  add_near_field_tt();
+  factor_ = Factor::blocks;
 }
 
 VecX DenseStokesianDynamics::apply_inverse_mobility(const VecX& x) const {
-  const long n = long(perm_.size());
-  VecX y(n);
-  for (long r = 0; r < n; ++r) y[r] = x[perm_[std::size_t(r)]];
-  lapack::potrs(L_, y);
-  VecX out(n);
-  for (long r = 0; r < n; ++r) out[perm_[std::size_t(r)]] = y[r];
+  if (factor_ == Factor::full) {
+    const long n = long(perm_.size());
+    VecX y(n);
+    for (long r = 0; r < n; ++r) y[r] = x[perm_[std::size_t(r)]];
+    lapack::potrs(L_, y);
+    VecX out(n);
+    for (long r = 0; r < n; ++r) out[perm_[std::size_t(r)]] = y[r];
+    return out;
+  }
+  if (factor_ != Factor::blocks) throw std::logic_error("dense SD: the far field is not factored");
+  // a = L_H^{-1} x_H;  y_I = S^{-1} (x_I - W^T a);  y_H = L_H^{-T} (a - W y_I).
+  const long ni = long(perm_.size()), nh = long(held_entries_.size());
+  VecX a(nh), yi(ni);
+  for (long r = 0; r < nh; ++r) a[r] = x[held_entries_[std::size_t(r)]];
+  held_L_.triangularView<Eigen::Lower>().solveInPlace(a);
+  for (long r = 0; r < ni; ++r) yi[r] = x[perm_[std::size_t(r)]];
+  if (ni) {
+    yi.noalias() -= W_.transpose() * a;
+    lapack::potrs(L_, yi);
+    a.noalias() -= W_ * yi;
+  }
+  held_L_.triangularView<Eigen::Lower>().transpose().solveInPlace(a);
+  VecX out(x.size());
+  for (long r = 0; r < ni; ++r) out[perm_[std::size_t(r)]] = yi[r];
+  for (long r = 0; r < nh; ++r) out[held_entries_[std::size_t(r)]] = a[r];
   return out;
 }
 
 const MatX& DenseStokesianDynamics::resistance() const {
   if (have_R_) return R_;
-  const long n = long(perm_.size());
-  MatX X = L_;
+  // The whole R: the far field factored in the natural order, whatever the last solve used.
+  if (!config_.valid) throw std::logic_error("dense SD: resistance() before prepare()");
+  MatX X = full_mobility();
+  if (lapack::potrf(X) != 0) far_field_not_positive_definite();
   if (lapack::potri(X) != 0) throw std::logic_error("dense SD: dpotri failed on the factored far field");
-  R_.resize(n, n);
-#pragma omp parallel for schedule(static)
-  for (long col = 0; col < n; ++col)
-    for (long r = col; r < n; ++r) R_(perm_[std::size_t(r)], perm_[std::size_t(col)]) = R_(perm_[std::size_t(col)], perm_[std::size_t(r)]) = X(r, col);
+  R_ = X.selfadjointView<Eigen::Lower>();
   R_ += MatX(Rnf_);
   have_R_ = true;
   return R_;
 }
 
 HydroResult DenseStokesianDynamics::solve(const HydroProblem& p) {
+  factor(p.fixed);
   const RigidConstraints c = RigidConstraints::of(m_, p.fixed, p.force, p.torque, p.flow);
   const std::vector<long>& v = c.force_given;   // unknown motion
   // Right-hand side f + f_B + M_inf^{-1} u_s (engine/hydro_solver.hpp).
@@ -250,15 +398,20 @@ std::vector<Vec3> DenseStokesianDynamics::brownian_displacement(double, double, 
 }
 
 VecX DenseStokesianDynamics::brownian_force(double kT, double dt, const std::vector<char>& fixed, Rng& rng) {
+  factor(fixed);
   const int d = dof_per_particle(m_);
-  const long n = L_.rows();
+  const long n = long(config_.x.size()) * d, nr = L_.rows();  // nr = n (full) or the mobile entries (held blocks)
   const std::vector<char> given = force_given_flags(m_, n / d, fixed);
+  // n normals either way (the stream advances alike); the held path uses those of the mobile rows.
   VecX psi(n);
   for (auto& v : psi) v = rng.normal();
-  const VecX z = L_.triangularView<Eigen::Lower>().transpose().solve(psi);  // L^{-T} psi, factored order
+  // L^{-T} psi over the factored order: covariance (M_inf^{-1}) there (full), S^{-1} = (M_inf^{-1})_II (blocks).
+  const VecX z = L_.triangularView<Eigen::Lower>().transpose().solve(psi.head(nr));
   VecX xi = near_.brownian_force(config_.x, config_.a, config_.domain, given, rng.fork());
   const double pref = std::sqrt(2.0 * kT / dt);
-  for (long r = 0; r < n; ++r) {
+  if (factor_ == Factor::blocks)
+    for (long q : held_entries_) xi[q] = 0.0;
+  for (long r = 0; r < nr; ++r) {
     const long q = perm_[std::size_t(r)];
     xi[q] = given[std::size_t(q)] ? pref * (xi[q] + z[r]) : 0.0;
   }

@@ -33,18 +33,26 @@ std::array<int, 3> index_bounds(const Mat3& inverse_basis, double R) {
 
 MatX ewald_mobility(const std::vector<Vec3>& x, const std::vector<double>& a, double mu, Moments m,
                     const Domain& domain, const EwaldReferenceOptions& opt) {
+  std::vector<long> all(x.size());
+  for (std::size_t i = 0; i < all.size(); ++i) all[i] = long(i);
+  return ewald_mobility_rows(x, a, mu, m, domain, all, opt);
+}
+
+MatX ewald_mobility_rows(const std::vector<Vec3>& x, const std::vector<double>& a, double mu, Moments m,
+                         const Domain& domain, const std::vector<long>& rows, const EwaldReferenceOptions& opt) {
   if (x.size() != a.size()) throw std::invalid_argument("ewald_mobility: size mismatch");
   const Lattice lat = Lattice::from_domain(domain);
   const double xi = opt.xi > 0.0 ? opt.xi : std::sqrt(kPi) / std::cbrt(lat.volume);
   const double rmax = opt.tail / xi, kmax = 2.0 * xi * opt.tail;
   const int d = dof_per_particle(m);
-  const long n = long(x.size());
-  MatX M = MatX::Zero(n * d, n * d);
+  const long n = long(x.size()), nr = long(rows.size());
+  MatX M = MatX::Zero(nr * d, n * d);
 
   // Real space: every pair (both orders, so symmetry is a test, not an assumption) and images.
   const auto nb = index_bounds(lat.Ainv, rmax + lat.A.norm());
 #pragma omp parallel for schedule(dynamic)
-  for (long i = 0; i < (opt.real ? n : 0); ++i) {
+  for (long k = 0; k < (opt.real ? nr : 0); ++k) {
+    const long i = rows[std::size_t(k)];
     double block[121], sum[121];  // one image's block and the image sum, d x d column-major
     for (long j = 0; j < n; ++j) {
       std::fill(sum, sum + d * d, 0.0);
@@ -60,10 +68,10 @@ MatX ewald_mobility(const std::vector<Vec3>& x, const std::vector<double>& a, do
                                       dist > 0.0 ? Vec3(r / dist) : Vec3::UnitZ(), m, block, d);
             for (int e = 0; e < d * d; ++e) sum[e] += block[e];
           }
-      add_block(M, i, j, sum, d);
+      add_block(M, k, j, sum, d);
     }
     mobility::fill_pair_block(self_correction(a[i], xi, mu), Vec3::UnitZ(), m, block, d);
-    add_block(M, i, i, block, d);
+    add_block(M, k, i, block, d);
   }
 
   // Wave space: half of the k-vectors (k and -k give complex-conjugate terms).
@@ -101,14 +109,37 @@ MatX ewald_mobility(const std::vector<Vec3>& x, const std::vector<double>& a, do
       Y.block(i * d, 4 * w + 2, d, 2).noalias() = Z.imag() * Q;
     }
   }
-  M.noalias() += (2.0 / lat.volume) * Y * Y.transpose();
+  if (nr == n) {
+    M.noalias() += (2.0 / lat.volume) * Y * Y.transpose();
+  } else {
+    MatX Yr(nr * d, 4 * K);
+    for (long k = 0; k < nr; ++k) Yr.middleRows(k * d, d) = Y.middleRows(rows[std::size_t(k)] * d, d);
+    M.noalias() += (2.0 / lat.volume) * Yr * Y.transpose();
+  }
   return M;
 }
 
 void EwaldFarField::set_configuration(const Configuration& c) {
-  if (built_.same_as(c)) return;
-  M_ = ewald_mobility(c.x, c.a, mu_, m_, c.domain, opt_);
-  built_.store(c);
+  if (config_.same_as(c)) return;
+  config_.store(c);
+  built_ = false;
+}
+
+const MatX& EwaldFarField::matrix() const {
+  if (!built_) {
+    if (!config_.valid) throw std::logic_error("ewald far field: no configuration set");
+    M_ = ewald_mobility(config_.x, config_.a, mu_, m_, config_.domain, opt_);
+    built_ = true;
+  }
+  return M_;
+}
+
+bool EwaldFarField::dense_rows(const std::vector<long>& particles, MatX& rows) const {
+  if (!config_.valid) throw std::logic_error("ewald far field: no configuration set");
+  // Always summed afresh (not copied from a built M_), so that the rows do not depend on what
+  // was asked before.
+  rows = ewald_mobility_rows(config_.x, config_.a, mu_, m_, config_.domain, particles, opt_);
+  return true;
 }
 
 }  // namespace stokesian::ewald

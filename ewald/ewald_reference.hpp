@@ -30,9 +30,13 @@ struct EwaldReferenceOptions {
 // Dense (dN x dN) periodic grand mobility, layout [F(3) T(3) S(5)] per particle.
 MatX ewald_mobility(const std::vector<Vec3>& x, const std::vector<double>& a, double mu, Moments m,
                     const Domain& domain, const EwaldReferenceOptions& opt = {});
+// Its block rows of the given particles (ascending): (d |rows|) x (d N), the same sums.
+MatX ewald_mobility_rows(const std::vector<Vec3>& x, const std::vector<double>& a, double mu, Moments m,
+                         const Domain& domain, const std::vector<long>& rows, const EwaldReferenceOptions& opt = {});
 
-// Dense Ewald operator: the matrix is built per configuration and kept while the configuration
-// is unchanged (positions, radii, box and strain all equal), e.g. for repeated Brownian draws.
+// Dense Ewald operator: the matrix is built on first use per configuration and kept while the
+// configuration is unchanged (positions, radii, box and strain all equal), e.g. for repeated
+// Brownian draws; dense_rows builds only the rows asked for.
 class EwaldFarField final : public MobilityOperator {
  public:
   explicit EwaldFarField(const MobilitySpec& spec, const EwaldReferenceOptions& opt = {})
@@ -43,20 +47,22 @@ class EwaldFarField final : public MobilityOperator {
     set_configuration({x, a, domain});
   }
   Moments moments() const override { return m_; }
-  Eigen::Index size() const override { return M_.rows(); }
+  Eigen::Index size() const override { return Eigen::Index(config_.x.size()) * dof_per_particle(m_); }
   void set_configuration(const Configuration& c) override;
   bool set_configuration_uses_threads(long) const override { return true; }
-  void apply(const VecX& in, VecX& out) const override { out.noalias() = M_ * in; }
+  void apply(const VecX& in, VecX& out) const override { out.noalias() = matrix() * in; }
   const char* name() const override { return "ewald"; }
-  const MatX* dense() const override { return &M_; }
-  const MatX& matrix() const { return M_; }
+  const MatX* dense() const override { return &matrix(); }
+  bool dense_rows(const std::vector<long>& particles, MatX& rows) const override;
+  const MatX& matrix() const;
 
  private:
   double mu_;
   Moments m_;
   EwaldReferenceOptions opt_;
-  StoredConfiguration built_;  // the configuration M_ belongs to
-  MatX M_;
+  StoredConfiguration config_;  // the configuration set
+  mutable bool built_ = false;  // whether M_ belongs to it
+  mutable MatX M_;
 };
 
 }  // namespace stokesian::ewald

@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <random>
 
 using namespace stokesian;
@@ -206,5 +207,136 @@ TEST_CASE("dense SD: a second solve with another fixed set refactors R_vv") {
     CHECK(rel(b.U, reference(c, open, m, AmbientFlow{}, some, F, T).res.U) < 1e-10);
     CHECK(b.U[4].norm() == 0.0);
     CHECK(rel(a2.U, a.U) == 0.0);
+  }
+}
+
+// Held particles eliminated by the Schur complement (engine/sd_dense.hpp): the solve, with loads,
+// an ambient flow, a force noise and a slip, equals the full factorisation (set_held_blocks(false),
+// the reference twin) and the plain reference above, to 1e-10 relative; held fractions from a
+// quarter to all of them; open, periodic and sheared periodic; F, FT, FTS. The held block's factor
+// is kept while the held particles stay put (mobile ones moved: reused, same answers as a fresh
+// solver) and refactored when one moves.
+TEST_CASE("dense SD: held particles by the Schur complement equal the full factorisation") {
+  AmbientFlow shear;
+  shear.E(0, 1) = shear.E(1, 0) = 0.35;
+  shear.Omega = Vec3(0.0, 0.0, -0.35);
+  int seed = 0;
+  for (int geometry = 0; geometry < 3; ++geometry) {
+    Domain dom;
+    const long n = geometry == 0 ? 60 : 40;
+    const double L = geometry == 0 ? std::cbrt(double(n) * 4.6 / 0.15) : 12.5;
+    if (geometry > 0) {
+      dom.kind = Domain::Kind::periodic;
+      dom.box = Vec3(L, 1.1 * L, 0.95 * L);
+      dom.shear_strain = geometry == 2 ? 0.1 : 0.0;
+    }
+    const Cloud c = cloud(n, L, dom, unsigned(300 + seed++));
+    std::mt19937_64 g{static_cast<unsigned>(seed)};
+    std::normal_distribution<double> nd;
+    std::vector<Vec3> F(static_cast<std::size_t>(n)), T(static_cast<std::size_t>(n));
+    for (long i = 0; i < n; ++i) {
+      F[std::size_t(i)] = Vec3(nd(g), nd(g), nd(g));
+      T[std::size_t(i)] = Vec3(nd(g), nd(g), nd(g));
+    }
+    for (const double fraction : {0.25, 0.5, 0.9, 1.0}) {
+      std::vector<char> fixed(static_cast<std::size_t>(n), 0);
+      for (long i = 0; i < n; ++i) fixed[std::size_t(i)] = (double(i) + 0.5) / double(n) < fraction ? 1 : 0;
+      std::shuffle(fixed.begin(), fixed.end(), g);
+      for (Moments m : {Moments::F, Moments::FT, Moments::FTS}) {
+        CAPTURE(geometry);
+        CAPTURE(fraction);
+        CAPTURE(dof_per_particle(m));
+        const long dn = n * dof_per_particle(m);
+        VecX noise(dn), slip(dn);
+        for (long q = 0; q < dn; ++q) noise[q] = nd(g), slip[q] = 0.1 * nd(g);
+        const Configuration cfg{c.x, c.a, dom};
+        FlowSample fs;
+        shear.sample(c.x, fs);
+        DenseStokesianDynamics blocks(m, 1.0, shear), full(m, 1.0, shear);
+        full.set_held_blocks(false);
+        blocks.prepare(cfg);
+        full.prepare(cfg);
+        const HydroResult a = blocks.solve(HydroProblem{cfg, fixed, fs, F, T, &noise, &slip});
+        const HydroResult b = full.solve(HydroProblem{cfg, fixed, fs, F, T, &noise, &slip});
+        CHECK(!blocks.reused_held_factor());
+        CHECK(rel(a.U, b.U) < 1e-10);
+        CHECK(rel(a.F, b.F) < 1e-10);
+        if (m != Moments::F) CHECK(rel(a.Omega, b.Omega) < 1e-10);
+        if (m == Moments::FTS) CHECK(rel(a.S, b.S) < 1e-10);
+        const Reference ref = reference(c, dom, m, shear, fixed, F, T);
+        const HydroResult plain = blocks.solve(HydroProblem{cfg, fixed, fs, F, T});
+        CHECK(rel(plain.U, ref.res.U) < 1e-10);
+        CHECK(rel(plain.F, ref.res.F) < 1e-10);
+        if (m == Moments::FTS) CHECK(rel(plain.S, ref.res.S) < 1e-10);
+        for (long i = 0; i < n; ++i)
+          if (fixed[std::size_t(i)]) CHECK(a.U[std::size_t(i)].norm() == 0.0);
+
+        // Mobile particles moved (the held ones stay): the held factor is reused.
+        Cloud moved = c;
+        for (long i = 0; i < n; ++i)
+          if (!fixed[std::size_t(i)]) moved.x[std::size_t(i)] += Vec3(0.004, -0.003, 0.002);
+        const Configuration cfg2{moved.x, moved.a, dom};
+        shear.sample(moved.x, fs);
+        blocks.prepare(cfg2);
+        const HydroResult r2 = blocks.solve(HydroProblem{cfg2, fixed, fs, F, T});
+        CHECK(blocks.reused_held_factor());
+        const Reference ref2 = reference(moved, dom, m, shear, fixed, F, T);
+        CHECK(rel(r2.U, ref2.res.U) < 1e-10);
+        CHECK(rel(r2.F, ref2.res.F) < 1e-10);
+        // A held particle moved: refactored, and still right.
+        const auto h = std::find(fixed.begin(), fixed.end(), char(1)) - fixed.begin();
+        moved.x[std::size_t(h)] += Vec3(0.0, 0.0, 1e-3);
+        const Configuration cfg3{moved.x, moved.a, dom};
+        shear.sample(moved.x, fs);
+        blocks.prepare(cfg3);
+        const HydroResult r3 = blocks.solve(HydroProblem{cfg3, fixed, fs, F, T});
+        CHECK(!blocks.reused_held_factor());
+        const Reference ref3 = reference(moved, dom, m, shear, fixed, F, T);
+        CHECK(rel(r3.F, ref3.res.F) < 1e-10);
+      }
+    }
+  }
+}
+
+// MobilityOperator::dense_rows (the held path's mobile rows) against the rows of dense(): the
+// direct sum and the Ewald sum (unsheared and at strain 0.2), F/FT/FTS, a few rows, all rows and
+// none; within 1e-13 of the matrix's largest entry.
+TEST_CASE("dense far fields: dense_rows equals those rows of dense()") {
+  for (int geometry = 0; geometry < 3; ++geometry) {
+    Domain dom;
+    const long n = 24;
+    const double L = 10.0;
+    if (geometry > 0) {
+      dom.kind = Domain::Kind::periodic;
+      dom.box = Vec3(L, 1.2 * L, 0.9 * L);
+      dom.shear_strain = geometry == 2 ? 0.2 : 0.0;
+    }
+    const Cloud c = cloud(n, L, dom, unsigned(77 + geometry));
+    for (Moments m : {Moments::F, Moments::FT, Moments::FTS}) {
+      CAPTURE(geometry);
+      CAPTURE(dof_per_particle(m));
+      const MobilitySpec spec{m, 1.0, 1e-6};
+      std::unique_ptr<MobilityOperator> op;
+      if (geometry == 0) op = std::make_unique<DirectFarField>(spec);
+      else op = std::make_unique<ewald::EwaldFarField>(spec);
+      op->set_configuration({c.x, c.a, dom});
+      const int d = dof_per_particle(m);
+      for (const std::vector<long>& rows : {std::vector<long>{3}, std::vector<long>{0, 5, 6, 17, 23},
+                                            std::vector<long>{}}) {
+        MatX R;
+        REQUIRE(op->dense_rows(rows, R));
+        const MatX& M = *op->dense();
+        REQUIRE(R.rows() == long(rows.size()) * d);
+        REQUIRE(R.cols() == M.cols());
+        for (std::size_t k = 0; k < rows.size(); ++k)
+          CHECK((R.middleRows(long(k) * d, d) - M.middleRows(rows[k] * d, d)).cwiseAbs().maxCoeff() <=
+                1e-13 * M.cwiseAbs().maxCoeff());
+      }
+      std::vector<long> all(static_cast<std::size_t>(n));
+      for (long i = 0; i < n; ++i) all[std::size_t(i)] = i;
+      MatX R;
+      REQUIRE(op->dense_rows(all, R));
+      CHECK((R - *op->dense()).cwiseAbs().maxCoeff() <= 1e-13 * op->dense()->cwiseAbs().maxCoeff());
+    }
   }
 }

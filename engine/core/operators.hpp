@@ -61,6 +61,14 @@ class MobilityOperator {
   virtual void apply(const VecX& in, VecX& out) const = 0;
   // The dense matrix when the method has it (reference methods); nullptr otherwise.
   virtual const MatX* dense() const { return nullptr; }
+  // The rows of the dense matrix that belong to the given particles (ascending, distinct): rows is
+  // set to (d |particles|) x (d N), row d k + c the entry c of particles[k], equal to those rows
+  // of dense() up to round-off, without forming the rest. False when the method cannot.
+  virtual bool dense_rows(const std::vector<long>& particles, MatX& rows) const {
+    (void)particles;
+    (void)rows;
+    return false;
+  }
   // Whether set_configuration for n particles runs OpenMP loops over every thread (the step's
   // task graph then runs it alone rather than beside other phases).
   virtual bool set_configuration_uses_threads(long n) const {

@@ -57,6 +57,29 @@ void assemble_mobility(const std::vector<Vec3>& x, const std::vector<double>& a,
   }
 }
 
+void assemble_mobility_rows(const std::vector<Vec3>& x, const std::vector<double>& a, double mu, Moments m,
+                            const std::vector<long>& particles, MatX& rows) {
+  const int d = dof_per_particle(m);
+  const long n = long(x.size()), np = long(particles.size());
+  rows.resize(np * d, n * d);
+  // Block (i, j) with e = (x_i - x_j) / r, as assemble_mobility writes block (i, j) for i > j.
+#pragma omp parallel for schedule(dynamic, 4)
+  for (long k = 0; k < np; ++k) {
+    const long i = particles[std::size_t(k)];
+    for (long j = 0; j < n; ++j) {
+      double* B = rows.data() + j * d * (np * d) + k * d;
+      if (j == i) {
+        mobility::fill_pair_block(mobility::self_scalars(a[i], mu), Vec3::UnitZ(), m, B, np * d);
+        continue;
+      }
+      const Vec3 rij = x[i] - x[j];
+      const double r = rij.norm();
+      const Vec3 e = r > 0 ? Vec3(rij / r) : Vec3::UnitZ();
+      mobility::fill_pair_block(mobility::pair_scalars(a[i], a[j], r, mu, m), e, m, B, np * d);
+    }
+  }
+}
+
 void mobility_product_reference(const std::vector<Vec3>& x, const std::vector<double>& a, double mu, Moments m,
                                 const VecX& in, VecX& out) {
   const int d = dof_per_particle(m);

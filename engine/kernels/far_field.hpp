@@ -25,6 +25,9 @@ MatX dense_mobility(const std::vector<Vec3>& x, const std::vector<double>& a, do
 MatX assemble_mobility(const std::vector<Vec3>& x, const std::vector<double>& a, double mu, Moments m);
 // In place: M is resized (its storage reused when the size is unchanged).
 void assemble_mobility(const std::vector<Vec3>& x, const std::vector<double>& a, double mu, Moments m, MatX& M);
+// The block rows of the given particles (ascending): rows is (d |particles|) x (d N).
+void assemble_mobility_rows(const std::vector<Vec3>& x, const std::vector<double>& a, double mu, Moments m,
+                            const std::vector<long>& particles, MatX& rows);
 
 // y = M x (y is resized).
 void mobility_product(const std::vector<Vec3>& x, const std::vector<double>& a, double mu, Moments m,
@@ -48,6 +51,10 @@ class DirectFarField final : public MobilityOperator {
   void set_configuration(const Configuration& c) override;
   void apply(const VecX& in, VecX& out) const override { mobility_product(x_, a_, mu_, m_, in, out); }
   const MatX* dense() const override;  // assembled on first request per configuration
+  bool dense_rows(const std::vector<long>& particles, MatX& rows) const override {
+    assemble_mobility_rows(x_, a_, mu_, m_, particles, rows);
+    return true;
+  }
 
  private:
   std::vector<Vec3> x_;
