@@ -8,7 +8,8 @@ configs/sweeps/hard_sphere_peclet.toml) or over `particles.volume_fraction` (the
 limit, configs/sweeps/noncolloidal_phi.toml); docs/rheology.md. Its summary.csv holds, per run,
 the window means and blocked standard errors of relative_viscosity[_part], N1[_part] and
 N2[_part]. Replicas of one point are combined: the mean of their means, with standard error
-sqrt(sum se_r^2) / R. Normal-stress differences are shown as N / (mu rate): against Pe with
+sqrt(sum se_r^2) / R, or the replicas' scatter s_R / sqrt(R) when that is larger (a run's blocked
+error misses what is slower than its window, e.g. structure at Pe < 1 that has not relaxed). Normal-stress differences are shown as N / (mu rate): against Pe with
 mu rate = Pe kT / (6 pi a^3) (the scene's Pe convention; kT from the first run's scene), against
 phi with mu and rate of the first run's scene. Published values, where
 tests/data/rheology_references.json holds them (entries whose values have "Pe" or "phi" and
@@ -67,7 +68,12 @@ def combine(rows, column, xkey):
     out = {}
     for x, vals in sorted(by_x.items()):
         R = len(vals)
-        out[x] = (sum(v for v, _ in vals) / R, math.sqrt(sum(e * e for _, e in vals)) / R, R)
+        mean = sum(v for v, _ in vals) / R
+        se = math.sqrt(sum(e * e for _, e in vals)) / R
+        if R > 1:  # the replicas' own scatter, when it exceeds what their blocked errors predict
+            spread = math.sqrt(sum((v - mean) ** 2 for v, _ in vals) / (R - 1) / R)
+            se = max(se, spread)
+        out[x] = (mean, se, R)
     return out
 
 
