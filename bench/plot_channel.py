@@ -58,8 +58,8 @@ for solver, shear, marker, ls in styles:
         ns = sorted({N for (ss, ff, N) in table if ss == s and ff == f and (s, 1.0, N) in table})
         if not ns:
             continue
-        ax[1].semilogx(ns, [table[(s, 1.0, N)] / table[(s, f, N)] for N in ns], marker=marker, ls=ls, color=f"C{k}",
-                       label=f"{names[s]}, N_I/N = {f:g}")
+        ax[1].loglog(ns, [table[(s, 1.0, N)] / table[(s, f, N)] for N in ns], marker=marker, ls=ls, color=f"C{k}",
+                     label=f"{names[s]}, N_I/N = {f:g}")
     for N in sorted({N for (ss, ff, N) in table if ss == s and ff == 1.0}):
         sp = [table[(s, 1.0, N)] / table[(s, f, N)] if (s, f, N) in table else float("nan") for f in fracs[1:]]
         print(f"  {names[s]:17s} {N:6d} {table[(s, 1.0, N)]:.3g} " + " ".join(f"{v:.2f}" for v in sp))
