@@ -217,7 +217,7 @@ def main():
     ax[1].legend(fontsize=7)
     note = "; merged: " + ", ".join(f"{xname} = {', '.join('%g' % x for x in sorted(v))} from {os.path.basename(k)}"
                                     for k, v in merged.items()) if merged else ""
-    fig.suptitle(f"{os.path.basename(os.path.abspath(a.folder))}: {len(rows)} finished runs{note}; error bars: blocked standard errors",
+    fig.suptitle(f"{os.path.basename(os.path.abspath(a.folder))}: {len(rows)} finished runs{note}; error bars: standard errors (blocked, or the replicas' scatter when larger)",
                  fontsize=9)
     fig.tight_layout()
     fig.savefig(a.out, dpi=110)
