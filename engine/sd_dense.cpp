@@ -318,12 +318,22 @@ VecX DenseStokesianDynamics::apply_inverse_mobility(const VecX& x) const {
 
 const MatX& DenseStokesianDynamics::resistance() const {
   if (have_R_) return R_;
-  // The whole R: the far field factored in the natural order, whatever the last solve used.
   if (!config_.valid) throw std::logic_error("dense SD: resistance() before prepare()");
-  MatX X = full_mobility();
-  if (lapack::potrf(X) != 0) far_field_not_positive_definite();
-  if (lapack::potri(X) != 0) throw std::logic_error("dense SD: dpotri failed on the factored far field");
-  R_ = X.selfadjointView<Eigen::Lower>();
+  if (factor_ == Factor::full) {  // from the full factor in its order
+    const long n = long(perm_.size());
+    MatX X = L_;
+    if (lapack::potri(X) != 0) throw std::logic_error("dense SD: dpotri failed on the factored far field");
+    R_.resize(n, n);
+#pragma omp parallel for schedule(static)
+    for (long col = 0; col < n; ++col)
+      for (long r = col; r < n; ++r)
+        R_(perm_[std::size_t(r)], perm_[std::size_t(col)]) = R_(perm_[std::size_t(col)], perm_[std::size_t(r)]) = X(r, col);
+  } else {  // not factored, or by blocks: the whole far field factored here in the natural order
+    MatX X = full_mobility();
+    if (lapack::potrf(X) != 0) far_field_not_positive_definite();
+    if (lapack::potri(X) != 0) throw std::logic_error("dense SD: dpotri failed on the factored far field");
+    R_ = X.selfadjointView<Eigen::Lower>();
+  }
   R_ += MatX(Rnf_);
   have_R_ = true;
   return R_;
