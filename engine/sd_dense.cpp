@@ -181,20 +181,26 @@ void DenseStokesianDynamics::add_near_field_tt() {
     }
 }
 
+void DenseStokesianDynamics::order_entries(const std::vector<char>& held) {
+  const int d = dof_per_particle(m_);
+  const long np = long(config_.x.size());
+  // The entries of the particles not held: their stresslets first, then their forces/torques.
+  perm_.clear();
+  for (int pass = 0; pass < 2; ++pass) {
+    if (pass == 1) n0_ = long(perm_.size());
+    const int k0 = pass == 0 ? 6 : 0, k1 = pass == 0 ? d : std::min(d, 6);
+    for (long i = 0; i < np; ++i)
+      if (!held[std::size_t(i)])
+        for (int k = k0; k < k1; ++k) perm_.push_back(i * d + k);
+  }
+  pos_.assign(std::size_t(np * d), -1);
+  for (long r = 0; r < long(perm_.size()); ++r) pos_[std::size_t(perm_[std::size_t(r)])] = r;
+}
+
 void DenseStokesianDynamics::factor_full() {
   const MatX& M = full_mobility();
-  const int d = dof_per_particle(m_);
-  const long n = long(M.rows()), np = n / d;
-  // Factored order: the stresslet entries of every particle, then the force/torque entries.
-  perm_.clear();
-  if (d > 6)
-    for (long i = 0; i < np; ++i)
-      for (int k = 6; k < d; ++k) perm_.push_back(i * d + k);
-  n0_ = long(perm_.size());
-  for (long i = 0; i < np; ++i)
-    for (int k = 0; k < std::min(d, 6); ++k) perm_.push_back(i * d + k);
-  pos_.assign(std::size_t(n), 0);
-  for (long r = 0; r < n; ++r) pos_[std::size_t(perm_[std::size_t(r)])] = r;
+  const long n = long(M.rows());
+  order_entries(std::vector<char>(config_.x.size(), 0));
   L_.resize(n, n);
 #pragma omp parallel for schedule(static)
   for (long col = 0; col < n; ++col) {
@@ -213,23 +219,12 @@ void DenseStokesianDynamics::factor_full() {
 void DenseStokesianDynamics::factor_blocks(const std::vector<char>& held) {
   const int d = dof_per_particle(m_);
   const long np = long(config_.x.size()), n = np * d;
-  // Mobile entries: stresslets first, then forces/torques (as the full order); held entries by particle.
-  perm_.clear();
-  if (d > 6)
-    for (long i = 0; i < np; ++i)
-      if (!held[std::size_t(i)])
-        for (int k = 6; k < d; ++k) perm_.push_back(i * d + k);
-  n0_ = long(perm_.size());
-  for (long i = 0; i < np; ++i)
-    if (!held[std::size_t(i)])
-      for (int k = 0; k < std::min(d, 6); ++k) perm_.push_back(i * d + k);
+  order_entries(held);  // the mobile entries; the held ones by particle:
   std::vector<long> hs;
   for (long i = 0; i < np; ++i)
     if (held[std::size_t(i)])
       for (int k = 0; k < d; ++k) hs.push_back(i * d + k);
   const long ni = long(perm_.size()), nh = long(hs.size());
-  pos_.assign(std::size_t(n), -1);
-  for (long r = 0; r < ni; ++r) pos_[std::size_t(perm_[std::size_t(r)])] = r;
 
   // The held block is kept while the held particles, their radii and the domain are those it was
   // factored for (the far field's entries are functions of these alone). Then only the mobile

@@ -128,6 +128,7 @@ class DenseStokesianDynamics final : public HydroSolver {
   mutable MatX R_;
   mutable bool have_R_ = false;
   void factor(const std::vector<char>& fixed);
+  void order_entries(const std::vector<char>& held);  // perm_, n0_, pos_ of the particles not held
   void factor_full();
   void factor_blocks(const std::vector<char>& held);
   void add_near_field_tt();

@@ -48,6 +48,20 @@ Cloud cloud(long n, double L, const Domain& dom, unsigned seed) {
   return c;
 }
 
+// Unit-variance random forces and torques on n particles, from generator g.
+struct Loads {
+  std::vector<Vec3> F, T;
+};
+Loads random_loads(long n, std::mt19937_64& g) {
+  std::normal_distribution<double> nd;
+  Loads l{std::vector<Vec3>(static_cast<std::size_t>(n)), std::vector<Vec3>(static_cast<std::size_t>(n))};
+  for (std::size_t i = 0; i < l.F.size(); ++i) {
+    l.F[i] = Vec3(nd(g), nd(g), nd(g));
+    l.T[i] = Vec3(nd(g), nd(g), nd(g));
+  }
+  return l;
+}
+
 // Plain reference: R = M^{-1} + R_nf (M from the explicit tensors, inverted by Eigen's LLT),
 // then R_vv V = f_v - R_vk V_k solved by Eigen's LLT and the moments R [V; V_k].
 struct Reference {
@@ -148,12 +162,7 @@ TEST_CASE("dense SD fast path equals the plain M^-1 + R_nf reference (F/FT/FTS, 
       const Domain dom = periodic ? box : Domain{};
       const Cloud c = cloud(n, L, dom, unsigned(100 + seed++));
       std::mt19937_64 g{static_cast<unsigned>(seed)};
-      std::normal_distribution<double> nd;
-      std::vector<Vec3> F(static_cast<std::size_t>(n)), T(static_cast<std::size_t>(n));
-      for (long i = 0; i < n; ++i) {
-        F[std::size_t(i)] = Vec3(nd(g), nd(g), nd(g));
-        T[std::size_t(i)] = Vec3(nd(g), nd(g), nd(g));
-      }
+      const auto [F, T] = random_loads(n, g);
       for (const bool with_fixed : {false, true}) {
         std::vector<char> fixed;
         if (with_fixed) {
@@ -233,12 +242,8 @@ TEST_CASE("dense SD: held particles by the Schur complement equal the full facto
     }
     const Cloud c = cloud(n, L, dom, unsigned(300 + seed++));
     std::mt19937_64 g{static_cast<unsigned>(seed)};
-    std::normal_distribution<double> nd;
-    std::vector<Vec3> F(static_cast<std::size_t>(n)), T(static_cast<std::size_t>(n));
-    for (long i = 0; i < n; ++i) {
-      F[std::size_t(i)] = Vec3(nd(g), nd(g), nd(g));
-      T[std::size_t(i)] = Vec3(nd(g), nd(g), nd(g));
-    }
+    std::normal_distribution<double> nd;  // noise and slip below
+    const auto [F, T] = random_loads(n, g);
     for (const double fraction : test::kSanitized ? std::vector<double>{0.5, 1.0} : std::vector<double>{0.25, 0.5, 0.9, 1.0}) {
       std::vector<char> fixed(static_cast<std::size_t>(n), 0);
       for (long i = 0; i < n; ++i) fixed[std::size_t(i)] = (double(i) + 0.5) / double(n) < fraction ? 1 : 0;
