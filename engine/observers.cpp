@@ -5,6 +5,7 @@
 #include "engine/core/errors.hpp"
 #include "engine/core/flow.hpp"
 #include "engine/core/sym_traceless.hpp"
+#include "engine/pair_forces.hpp"
 #include "engine/stress.hpp"
 #include "trees/clusters.hpp"
 #include "trees/neighbor_list.hpp"
@@ -44,7 +45,7 @@ Registry<ParticleOutputEntry> make_particle_outputs() {
   r.add({"force", {"force", {3}, {}, units::force}, always, "", [](const State& s, const Evaluation& ev, Frame& f) {
            std::vector<Vec3> F = ev.force;
            for (std::size_t i = 0; i < s.size(); ++i)
-             if (!s.fixed.empty() && s.fixed[i]) F[i] = ev.hydro.F[i];  // holding force of fixed particles
+             if (!s.fixed.empty() && s.fixed[i]) F[i] = ev.hydro.F[i];  // fixed particles: the force on the fluid
            f.set_particles("force", F);
          }});
   r.add({"torque", {"torque", {3}, {}, units::energy}, rotations, "moments = \"FT\" or \"FTS\"",
@@ -173,13 +174,21 @@ class BulkStress final : public Observer {
   bool fts_, pairs_, brownian_, brownian_stresslet_;
 };
 
-// Channels ([walls], engine/core/channel.hpp, docs/channels.md). Held forces F are those exerted on
-// the fluid; the fluid's force on a held particle is -F.
-//   wall_force: sum of F over the wall particles.
-//   pressure_drop_particles (slit, duct): -sum_{held} F_x / A over every held particle (walls and any
-//     fixed obstacle), A the cross-section (Lee et al. 2024 §3.2, read as in method note P17).
+// Channels ([walls], engine/core/channel.hpp, docs/channels.md). The solve's F of a held particle is
+// the force it exerts on the fluid (the fluid's force on it is -F); P is the pair force the mobile
+// particles exert on it (deposits held by attraction, contact). Its load, what holds it in place
+// against fluid and particles, is L = P - F, and C = F - P the force the constraint applies.
+//   wall_force: sum of F over the wall particles (the fluid's part alone).
+//   pressure_drop_particles (slit, duct): sum_{held} L_x / A = -sum_{held} (F_x - P_x) / A over every
+//     held particle (walls and any fixed obstacle), A the cross-section (Lee et al. 2024 §3.2, read as
+//     in method note P17). The fluid's momentum balance: the solids' total force on it is
+//     sum_held F + sum_mobile F, and a quasi-static mobile particle's F is its non-hydrodynamic
+//     force, so pairs between mobile particles cancel and those with held ones leave -P; with no
+//     external force on the mobile particles (and the Brownian forces averaging out) that total is
+//     sum_held (F - P). Dropping P would miss the drag on deposits and clogs that attraction holds
+//     to the walls, and count the lubrication push of spheres pulled onto a wall without the pull.
 //   Outline: the same along the inlet's inward normal; per branch (engine/core/outline.hpp)
-//     pressure_drop_branches = -sum_{held in b} F . d_b / (width_b x depth) and
+//     pressure_drop_branches = sum_{held in b} L . d_b / (width_b x depth) and
 //     areal_fraction_branches = sum_{interior in b} pi a^2 / (fluid area of b).
 //   wall_shear_stress, wall_normal_stress [walls][sections]: per wall (slit: bottom, top; duct: also
 //     the side walls at -z, +z) and per section along x, the fluid's streamwise force on its wall
@@ -196,7 +205,8 @@ class ChannelOutputs final : public Observer {
         d_(scene.domain),
         walls_(scene.wall_count),
         area_(cross_section_area(scene.walls, scene.domain)),
-        sections_(std::max(1L, scene.walls.sections)) {
+        sections_(std::max(1L, scene.walls.sections)),
+        pair_laws_(scene.forces.pair) {
     x0_ = d_.periodic() ? 0.0 : -0.5 * c_.length;
     len_ = d_.periodic() ? d_.box.x() : c_.length;
     nw_ = c_.kind == ChannelParams::Kind::duct ? 4 : c_.kind == ChannelParams::Kind::slit ? 2 : 1;
@@ -234,21 +244,23 @@ class ChannelOutputs final : public Observer {
     const std::vector<OutlineBranch>& br = branches_.branch;
     std::vector<double> shear(nw * ns, 0.0), normal(nw * ns, 0.0), areal(ns, 0.0);
     std::vector<double> branch_drop(br.size(), 0.0), branch_areal(br.size(), 0.0);
+    const std::vector<Vec3> P = pair_force_from_mobile(s);
     for (std::size_t i = 0; i < n && i < ev.hydro.F.size(); ++i) {
       const Vec3& F = ev.hydro.F[i];
       const Vec2 x(s.position[i].x(), s.position[i].y()), F2(F.x(), F.y());
+      const Vec2 C2(F.x() - P[i].x(), F.y() - P[i].y());  // the constraint's force on a held particle
       const bool held = !s.fixed.empty() && s.fixed[i];
-      if (held) held_s += F2.dot(streamwise_);
+      if (held) held_s += C2.dot(streamwise_);
       if (i < n - walls_) {
         areal[section(x.x())] += kPi * s.radius[i] * s.radius[i];
         const long b = branches_.of_point(x);
         if (b >= 0 && o_.contains(x)) branch_areal[std::size_t(b)] += kPi * s.radius[i] * s.radius[i];
-        if (b >= 0 && held) branch_drop[std::size_t(b)] -= F2.dot(br[std::size_t(b)].direction);
+        if (b >= 0 && held) branch_drop[std::size_t(b)] -= C2.dot(br[std::size_t(b)].direction);
         continue;
       }
       wall += F;
       const std::size_t e = o_.nearest_wall(x);
-      if (const long b = branches_.of_wall_particle(o_, x, e); b >= 0) branch_drop[std::size_t(b)] -= F2.dot(br[std::size_t(b)].direction);
+      if (const long b = branches_.of_wall_particle(o_, x, e); b >= 0) branch_drop[std::size_t(b)] -= C2.dot(br[std::size_t(b)].direction);
       const std::size_t w = std::size_t(std::find(wall_edge_.begin(), wall_edge_.end(), e) - wall_edge_.begin());
       const Vec2 t = (o_.b(e) - o_.a(e)).normalized();
       const double along = std::clamp((x - o_.a(e)).dot(t) / o_.length(e), 0.0, 1.0 - 1e-12);
@@ -283,9 +295,10 @@ class ChannelOutputs final : public Observer {
     const std::size_t ns = std::size_t(sections_), nw = std::size_t(nw_);
     std::vector<double> shear(nw * ns, 0.0), normal(nw * ns, 0.0), vol(ns, 0.0);
     const Vec3 ctr = channel_centre(d_);
+    const std::vector<Vec3> P = pair_force_from_mobile(s);
     for (std::size_t i = 0; i < n && i < ev.hydro.F.size(); ++i) {
       const Vec3& F = ev.hydro.F[i];
-      if (!s.fixed.empty() && s.fixed[i]) held_x += F.x();
+      if (!s.fixed.empty() && s.fixed[i]) held_x += F.x() - P[i].x();
       const std::size_t sec = section(s.position[i].x());
       if (i < n - walls_) {
         vol[sec] += 4.0 / 3.0 * kPi * std::pow(s.radius[i], 3);
@@ -330,6 +343,25 @@ class ChannelOutputs final : public Observer {
   }
 
  private:
+  // P: the pair forces of the mobile particles on each held one (zero elsewhere): those of all pairs
+  // less those among the held particles (wall particles a small gap apart attract each other).
+  std::vector<Vec3> pair_force_from_mobile(const State& s) const {
+    std::vector<Vec3> P(s.size(), Vec3::Zero());
+    if (pair_laws_.empty() || s.fixed.empty()) return P;
+    std::vector<Vec3> all, xh, among;
+    std::vector<double> ah;
+    std::vector<std::size_t> held;
+    forces::add_pair_forces(pair_laws_, s.position, s.radius, s.domain, all);
+    for (std::size_t i = 0; i < s.size(); ++i)
+      if (s.fixed[i]) {
+        held.push_back(i);
+        xh.push_back(s.position[i]);
+        ah.push_back(s.radius[i]);
+      }
+    forces::add_pair_forces(pair_laws_, xh, ah, s.domain, among);
+    for (std::size_t k = 0; k < held.size(); ++k) P[held[k]] = all[held[k]] - among[k];
+    return P;
+  }
   std::size_t section(double x) const {
     double t = (x - x0_) / len_;
     if (d_.periodic()) t -= std::floor(t);
@@ -347,6 +379,7 @@ class ChannelOutputs final : public Observer {
   OutlineBranches branches_;
   std::vector<double> section_area_;
   Vec2 streamwise_ = Vec2(1.0, 0.0);
+  std::vector<PairForceParams> pair_laws_;
 };
 
 // Settling clouds ([output] cloud; docs/clouds.md). Cloud members: the interior particles in

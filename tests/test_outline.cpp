@@ -402,3 +402,59 @@ steps = 1
     CHECK(dp[0] == doctest::Approx(values(f, "pressure_drop_particles")[0]).epsilon(1e-12));
   }
 }
+
+TEST_CASE("particle pressure drop: a sphere held by a pair force loads the walls as a held sphere does") {
+  // Momentum balance (engine/observers.cpp, ChannelOutputs): the particle pressure drop counts the
+  // load on the held particles, the fluid's force and the mobile particles' pair forces. Reference:
+  // solve 1 holds a sphere S and an anchor A upstream of it; solve 2 frees S and ties it to A with a
+  // spring whose pull equals the force S exerted on the fluid in solve 1. Then S stays at rest, the
+  // flow is that of solve 1, and the walls and the anchor carry the same total, so both drops agree;
+  // without the pair force on the anchor solve 2 would lose that force over the section (a drop of
+  // held - F_S / A < 0). The spring
+  // acts on every pair within its cut-off, wall particles too (0.05 a apart): those pulls among held
+  // particles are not loads from the suspension.
+  const std::string base = R"(
+[walls]
+kind = "outline"
+outline = [[0, -5], [40, -5], [40, 5], [0, 5]]
+openings = [1, 3]
+inlet = 3
+[flow]
+kind = "poiseuille"
+mean_velocity = 1.0
+[hydrodynamics]
+model = "far_field"
+moments = "F"
+tolerance = 1e-9
+[time]
+dt = 0.01
+steps = 1
+[particles]
+positions = [[20, 0, 0], [17, 0, 0]]
+)";
+  auto spring = [](double k, double h0) {
+    return "[[forces.pair]]\nkind = \"harmonic\"\nstiffness = " + std::to_string(k) + "\nrest_gap = " + std::to_string(h0) +
+           "\ncutoff = 1.2\n";
+  };
+  auto run = [](const Scene& sc, Vec3* F0, Vec3* U0) {
+    Simulation sim(sc);
+    const State st = sim.initial_state();
+    const Evaluation ev = sim.evaluate(st, st.position);
+    if (F0) *F0 = ev.hydro.F[0];
+    if (U0) *U0 = ev.hydro.U[0];
+    return sim.frame(st, ev).observables.at("pressure_drop_particles").values[0];
+  };
+  Vec3 Fs;
+  const double held = run(io::parse_scene(base + "fixed = [true, true]\n" + spring(50.0, 0.5), "held.toml"), &Fs, nullptr);
+  // S pushes the fluid upstream (the flow drags it along +x), along the centreline by symmetry.
+  REQUIRE(Fs.x() < 0.0);
+  CHECK(std::abs(Fs.y()) < 1e-6 * std::abs(Fs.x()));
+  // Spring pull on S towards A (along -x): k (h - h0) with h = 1 a; k = 2 |F_S| gives h0 = 0.5 a.
+  const double k = 2.0 * std::abs(Fs.x());
+  Vec3 Ufree;
+  const double tied = run(io::parse_scene(base + "fixed = [false, true]\n" + spring(k, 0.5), "tied.toml"), nullptr, &Ufree);
+  MESSAGE("held " << held << ", tied " << tied << " (|U_S| = " << Ufree.norm() << "); F_S / A = " << -Fs.x() / 20.0);
+  CHECK(Ufree.norm() < 1e-6);
+  CHECK(held > 0.0);
+  CHECK(tied == doctest::Approx(held).epsilon(1e-6));  // the pair term alone is F_S / A = 1.8 held
+}
