@@ -9,6 +9,7 @@ A run still going (or killed) is read as far as its visible frames go.
 usage: fouling_summary.py NAME=RUN.h5 [NAME=RUN.h5 ...] [--out bench/results/fouling.json] [--note TEXT]
 """
 import json
+import os
 import platform
 import subprocess
 import sys
@@ -152,6 +153,46 @@ def branch_series(scene, obs, x, r, ids, capacity, steps):
     return dp.tolist(), areal.tolist(), "rebuilt from wall_shear_stress and wall_normal_stress"
 
 
+# The commit from which the engine's pressure drops count the held particles' load (the fluid's
+# force and the mobile particles' pair forces); trajectories of earlier builds hold the fluid's part.
+LOAD_FIX = "0344c5d"
+
+
+def records_load(describe):
+    """Whether a build (git describe of its binary) has LOAD_FIX; unknown commits count as older."""
+    commit = describe.replace("-dirty", "").split("-g")[-1]
+    here = os.path.dirname(os.path.abspath(__file__))
+    return subprocess.run(["git", "merge-base", "--is-ancestor", LOAD_FIX, commit], cwd=here,
+                          capture_output=True).returncode == 0
+
+
+def momentum_drop(scene, F, ids, capacity):
+    """The particle pressure drop from the per-particle forces of each frame: the solids' force on the
+    fluid along the inlet's inward normal s over the inlet section A (width x depth),
+    -(sum_held F + sum_mobile F) . s / A. A held particle's recorded force is the one it exerts on the
+    fluid; a mobile one's is its non-hydrodynamic force, which a quasi-static particle passes on to
+    the fluid. Pair forces among mobile particles cancel, so this is the held particles' load of
+    docs/channels.md ("Outputs") when the mobile particles carry no external force (None then)."""
+    import tomllib
+    t = tomllib.loads(scene)
+    if t.get("forces", {}).get("external_force"):
+        return None
+    w = t["walls"]
+    v = np.array(w["outline"], float)
+    n, k = len(v), w["inlet"]
+    a2 = sum(v[j, 0] * v[(j + 1) % n, 1] - v[(j + 1) % n, 0] * v[j, 1] for j in range(n))
+    e = v[(k + 1) % n] - v[k]
+    width = np.linalg.norm(e)
+    e /= width
+    s_in = -(1.0 if a2 > 0 else -1.0) * np.array([e[1], -e[0]])  # minus the outward normal
+    area = width * w.get("depth", 2.0 * w.get("radius", 1.0))
+    out = []
+    for fr in range(F.shape[0]):
+        use = np.r_[ids[fr][:capacity] >= 0, np.ones(F.shape[1] - capacity, bool)]
+        out.append(float(-(F[fr][use, :2].sum(axis=0) @ s_in) / area))
+    return out
+
+
 def extract(path):
     f = h5py.File(path, "r")
     obs = f["observables"]
@@ -174,6 +215,20 @@ def extract(path):
     series["deposited"] = [deposited(x[k], r[k], ids[k], capacity) for k in range(len(steps))]
     series["pressure_drop_branches"], series["areal_fraction_branches"], how = branch_series(
         scene, obs, x, r, ids, capacity, steps)
+    # The held particles' load, from the per-particle forces; files of builds before LOAD_FIX record
+    # the fluid's force alone: their total is replaced by it and their per-branch drops dropped.
+    mom = momentum_drop(scene, part["force/value"][:], ids, capacity)
+    drop = {"recorded_is_load": records_load(build["describe"])}
+    if mom is not None:
+        rec = np.array(series["pressure_drop_particles"])
+        drop["max_abs_difference_recorded_momentum"] = float(np.max(np.abs(rec - np.array(mom))))
+        if not drop["recorded_is_load"]:
+            series["pressure_drop_particles_fluid_only"] = series["pressure_drop_particles"]
+            series["pressure_drop_particles"] = mom
+            del series["pressure_drop_branches"]
+            how = f"not available (written before {LOAD_FIX}: the fluid's force only)"
+    elif not drop["recorded_is_load"]:
+        raise SystemExit(f"{path}: written before {LOAD_FIX} with external forces: its drop cannot be rebuilt")
     # The last frame's configuration (present spheres and walls) for the picture.
     last = len(steps) - 1
     keep = np.where(ids[last] >= 0)[0]
@@ -181,7 +236,7 @@ def extract(path):
             "wall": (keep >= capacity).tolist()}
     return {"file": path, "build": build, "frames": len(steps), "last_step": int(steps[-1]), "last_time": float(times[-1]),
             "capacity": capacity, "scene": scene, "contact_gap": CONTACT, "series": series,
-            "snapshot": snap, "branches_source": how}
+            "snapshot": snap, "branches_source": how, "pressure_drop": drop}
 
 
 def main():
