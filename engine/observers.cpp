@@ -188,7 +188,8 @@ class BulkStress final : public Observer {
 //     sum_held (F - P). Dropping P would miss the drag on deposits and clogs that attraction holds
 //     to the walls, and count the lubrication push of spheres pulled onto a wall without the pull.
 //   Outline: the same along the inlet's inward normal; per branch (engine/core/outline.hpp)
-//     pressure_drop_branches = sum_{held in b} L . d_b / (width_b x depth) and
+//     pressure_drop_branches = (sum_{held in b} -F . d_b + sum_{mobile in b} Q . d_b) / (width_b x
+//     depth), Q a mobile particle's pair forces on the held ones (sum_m Q = sum_h P), and
 //     areal_fraction_branches = sum_{interior in b} pi a^2 / (fluid area of b).
 //   wall_shear_stress, wall_normal_stress [walls][sections]: per wall (slit: bottom, top; duct: also
 //     the side walls at -z, +z) and per section along x, the fluid's streamwise force on its wall
@@ -244,23 +245,31 @@ class ChannelOutputs final : public Observer {
     const std::vector<OutlineBranch>& br = branches_.branch;
     std::vector<double> shear(nw * ns, 0.0), normal(nw * ns, 0.0), areal(ns, 0.0);
     std::vector<double> branch_drop(br.size(), 0.0), branch_areal(br.size(), 0.0);
-    const std::vector<Vec3> P = pair_force_from_mobile(s);
+    // Per branch, the fluid's part of a held particle's load goes to the held particle's branch and
+    // a mobile particle's pull on the held ones (Q) to the mobile particle's branch: a deposit at a
+    // corner touching wall particles of two branches presses and pulls them by far more than its
+    // drag, and only the sum is its load (the total drop takes every part along the inlet alike).
+    const PairLoads pl = pair_loads(s);
     for (std::size_t i = 0; i < n && i < ev.hydro.F.size(); ++i) {
       const Vec3& F = ev.hydro.F[i];
       const Vec2 x(s.position[i].x(), s.position[i].y()), F2(F.x(), F.y());
-      const Vec2 C2(F.x() - P[i].x(), F.y() - P[i].y());  // the constraint's force on a held particle
+      const Vec2 P2(pl.on_held[i].x(), pl.on_held[i].y()), Q2(pl.of_mobile[i].x(), pl.of_mobile[i].y());
       const bool held = !s.fixed.empty() && s.fixed[i];
-      if (held) held_s += C2.dot(streamwise_);
+      if (held) held_s += (F2 - P2).dot(streamwise_);
       if (i < n - walls_) {
         areal[section(x.x())] += kPi * s.radius[i] * s.radius[i];
-        const long b = branches_.of_point(x);
+        long b = branches_.of_point(x);
         if (b >= 0 && o_.contains(x)) branch_areal[std::size_t(b)] += kPi * s.radius[i] * s.radius[i];
-        if (b >= 0 && held) branch_drop[std::size_t(b)] -= C2.dot(br[std::size_t(b)].direction);
+        if (b >= 0 && held) branch_drop[std::size_t(b)] -= F2.dot(br[std::size_t(b)].direction);
+        if (!held && Q2 != Vec2::Zero()) {
+          if (b < 0) b = branches_.of_wall_particle(o_, x, o_.nearest_wall(x));  // beyond an opening
+          if (b >= 0) branch_drop[std::size_t(b)] += Q2.dot(br[std::size_t(b)].direction);
+        }
         continue;
       }
       wall += F;
       const std::size_t e = o_.nearest_wall(x);
-      if (const long b = branches_.of_wall_particle(o_, x, e); b >= 0) branch_drop[std::size_t(b)] -= C2.dot(br[std::size_t(b)].direction);
+      if (const long b = branches_.of_wall_particle(o_, x, e); b >= 0) branch_drop[std::size_t(b)] -= F2.dot(br[std::size_t(b)].direction);
       const std::size_t w = std::size_t(std::find(wall_edge_.begin(), wall_edge_.end(), e) - wall_edge_.begin());
       const Vec2 t = (o_.b(e) - o_.a(e)).normalized();
       const double along = std::clamp((x - o_.a(e)).dot(t) / o_.length(e), 0.0, 1.0 - 1e-12);
@@ -295,7 +304,7 @@ class ChannelOutputs final : public Observer {
     const std::size_t ns = std::size_t(sections_), nw = std::size_t(nw_);
     std::vector<double> shear(nw * ns, 0.0), normal(nw * ns, 0.0), vol(ns, 0.0);
     const Vec3 ctr = channel_centre(d_);
-    const std::vector<Vec3> P = pair_force_from_mobile(s);
+    const std::vector<Vec3> P = pair_loads(s).on_held;
     for (std::size_t i = 0; i < n && i < ev.hydro.F.size(); ++i) {
       const Vec3& F = ev.hydro.F[i];
       if (!s.fixed.empty() && s.fixed[i]) held_x += F.x() - P[i].x();
@@ -343,24 +352,36 @@ class ChannelOutputs final : public Observer {
   }
 
  private:
-  // P: the pair forces of the mobile particles on each held one (zero elsewhere): those of all pairs
-  // less those among the held particles (wall particles a small gap apart attract each other).
-  std::vector<Vec3> pair_force_from_mobile(const State& s) const {
-    std::vector<Vec3> P(s.size(), Vec3::Zero());
-    if (pair_laws_.empty() || s.fixed.empty()) return P;
-    std::vector<Vec3> all, xh, among;
-    std::vector<double> ah;
-    std::vector<std::size_t> held;
+  // Pair loads between the mobile and the held particles, from the pair forces of all particles
+  // less those within each group (wall particles a small gap apart attract each other):
+  //   on_held[h]: P_h, the pull and push of the mobile particles on held particle h;
+  //   of_mobile[m]: Q_m, what mobile particle m exerts on the held ones in all (Newton's third law:
+  //     minus the held particles' force on m), so sum_m Q_m = sum_h P_h.
+  struct PairLoads {
+    std::vector<Vec3> on_held, of_mobile;
+  };
+  PairLoads pair_loads(const State& s) const {
+    PairLoads r{std::vector<Vec3>(s.size(), Vec3::Zero()), std::vector<Vec3>(s.size(), Vec3::Zero())};
+    if (pair_laws_.empty() || s.fixed.empty()) return r;
+    std::vector<Vec3> all;
     forces::add_pair_forces(pair_laws_, s.position, s.radius, s.domain, all);
-    for (std::size_t i = 0; i < s.size(); ++i)
-      if (s.fixed[i]) {
-        held.push_back(i);
-        xh.push_back(s.position[i]);
-        ah.push_back(s.radius[i]);
+    for (const bool held : {true, false}) {
+      std::vector<Vec3> x, among;
+      std::vector<double> a;
+      std::vector<std::size_t> ids;
+      for (std::size_t i = 0; i < s.size(); ++i)
+        if (bool(s.fixed[i]) == held) {
+          ids.push_back(i);
+          x.push_back(s.position[i]);
+          a.push_back(s.radius[i]);
+        }
+      forces::add_pair_forces(pair_laws_, x, a, s.domain, among);
+      for (std::size_t k = 0; k < ids.size(); ++k) {
+        const Vec3 cross = all[ids[k]] - among[k];  // from the other group
+        (held ? r.on_held : r.of_mobile)[ids[k]] = held ? cross : Vec3(-cross);
       }
-    forces::add_pair_forces(pair_laws_, xh, ah, s.domain, among);
-    for (std::size_t k = 0; k < held.size(); ++k) P[held[k]] = all[held[k]] - among[k];
-    return P;
+    }
+    return r;
   }
   std::size_t section(double x) const {
     double t = (x - x0_) / len_;

@@ -442,7 +442,11 @@ positions = [[20, 0, 0], [17, 0, 0]]
     const Evaluation ev = sim.evaluate(st, st.position);
     if (F0) *F0 = ev.hydro.F[0];
     if (U0) *U0 = ev.hydro.U[0];
-    return sim.frame(st, ev).observables.at("pressure_drop_particles").values[0];
+    const Frame f = sim.frame(st, ev);
+    // One branch: its drop takes the pair part by the mobile particle (Q), the total by the held (P).
+    const double total = f.observables.at("pressure_drop_particles").values[0];
+    CHECK(f.observables.at("pressure_drop_branches").values[0] == doctest::Approx(total).epsilon(1e-12));
+    return total;
   };
   Vec3 Fs;
   const double held = run(io::parse_scene(base + "fixed = [true, true]\n" + spring(50.0, 0.5), "held.toml"), &Fs, nullptr);
