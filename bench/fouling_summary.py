@@ -156,13 +156,16 @@ def branch_series(scene, obs, x, r, ids, capacity, steps):
 # The commit from which the engine's pressure drops count the held particles' load (the fluid's
 # force and the mobile particles' pair forces); trajectories of earlier builds hold the fluid's part.
 LOAD_FIX = "0344c5d"
+# From this commit a mobile particle's pair load goes to its own branch in pressure_drop_branches
+# (before, to the branches of the wall particles it touched: corner deposits split between two).
+BRANCH_FIX = "ba19fff"
 
 
-def records_load(describe):
-    """Whether a build (git describe of its binary) has LOAD_FIX; unknown commits count as older."""
+def has_commit(describe, fix):
+    """Whether a build (git describe of its binary) contains commit `fix`; unknown commits count as older."""
     commit = describe.replace("-dirty", "").split("-g")[-1]
     here = os.path.dirname(os.path.abspath(__file__))
-    return subprocess.run(["git", "merge-base", "--is-ancestor", LOAD_FIX, commit], cwd=here,
+    return subprocess.run(["git", "merge-base", "--is-ancestor", fix, commit], cwd=here,
                           capture_output=True).returncode == 0
 
 
@@ -218,7 +221,8 @@ def extract(path):
     # The held particles' load, from the per-particle forces; files of builds before LOAD_FIX record
     # the fluid's force alone: their total is replaced by it and their per-branch drops dropped.
     mom = momentum_drop(scene, part["force/value"][:], ids, capacity)
-    drop = {"recorded_is_load": records_load(build["describe"])}
+    drop = {"recorded_is_load": has_commit(build["describe"], LOAD_FIX),
+            "branches_by_mobile_particle": has_commit(build["describe"], BRANCH_FIX)}
     if mom is not None:
         rec = np.array(series["pressure_drop_particles"])
         drop["max_abs_difference_recorded_momentum"] = float(np.max(np.abs(rec - np.array(mom))))
@@ -229,6 +233,10 @@ def extract(path):
             how = f"not available (written before {LOAD_FIX}: the fluid's force only)"
     elif not drop["recorded_is_load"]:
         raise SystemExit(f"{path}: written before {LOAD_FIX} with external forces: its drop cannot be rebuilt")
+    if drop["recorded_is_load"] and not drop["branches_by_mobile_particle"] and "pressure_drop_branches" in series:
+        if np.array(series["pressure_drop_branches"]).shape[1] > 1:  # one branch: equal to the total either way
+            del series["pressure_drop_branches"]
+            how = f"not available (written before {BRANCH_FIX}: corner deposits split between branches)"
     # The last frame's configuration (present spheres and walls) for the picture.
     last = len(steps) - 1
     keep = np.where(ids[last] >= 0)[0]
