@@ -181,14 +181,9 @@ def momentum_drop(scene, F, ids, capacity):
     if t.get("forces", {}).get("external_force"):
         return None
     w = t["walls"]
-    v = np.array(w["outline"], float)
-    n, k = len(v), w["inlet"]
-    a2 = sum(v[j, 0] * v[(j + 1) % n, 1] - v[(j + 1) % n, 0] * v[j, 1] for j in range(n))
-    e = v[(k + 1) % n] - v[k]
-    width = np.linalg.norm(e)
-    e /= width
-    s_in = -(1.0 if a2 > 0 else -1.0) * np.array([e[1], -e[0]])  # minus the outward normal
-    area = width * w.get("depth", 2.0 * w.get("radius", 1.0))
+    inlet = branches(w["outline"], w["openings"], w["inlet"])[0][0]  # branch 0: d the inlet's inward normal
+    s_in = inlet["d"]
+    area = inlet["width"] * w.get("depth", 2.0 * w.get("radius", 1.0))
     out = []
     for fr in range(F.shape[0]):
         use = np.r_[ids[fr][:capacity] >= 0, np.ones(F.shape[1] - capacity, bool)]
