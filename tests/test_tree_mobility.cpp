@@ -253,8 +253,9 @@ TEST_CASE("knobs from the tolerance: achieved <= requested from 1e-2 to 1e-12 (u
   // n spheres: uniform (phi = 0.13), radii 0.3-3 (overlaps), and a dense spherical cloud (phi =
   // 0.3), with every leaf size the tuning of set_configuration can pick (32, 64, 128; the FT model's
   // factor comes from the dense cloud with leaves of 32, trees/tree_mobility.hpp). The default suite
-  // uses n = 1200; the long form (ctest -L long: test_tree_tolerance_long, n = 3000) is large enough
-  // that the tree converts most interactions at every theta the rule picks.
+  // uses n = 1200 and one leaf size per tolerance (below); the long form (ctest -L long:
+  // test_tree_tolerance_long, n = 3000, every leaf size) is large enough that the tree converts most
+  // interactions at every theta the rule picks.
   const char* env = std::getenv("STOKESIAN_TREE_SWEEP_N");
   const int n = env ? std::atoi(env) : 1200;
   const double scale = std::cbrt(n / 3000.0);
@@ -270,13 +271,19 @@ TEST_CASE("knobs from the tolerance: achieved <= requested from 1e-2 to 1e-12 (u
     ball.a.assign(ball.x.size(), 1.0);
     clouds.push_back(ball);
   }
+  // Leaf sizes: the default suite takes one per tolerance, in turn (each size meets three tolerances
+  // spread over the range, for every moment set); the long form takes all three at every tolerance.
+  const bool every_leaf = env != nullptr;
   for (Moments m : {Moments::F, Moments::FT, Moments::FTS}) {
     std::vector<DirectReference> refs;  // one direct product per cloud, shared by the tolerances
     for (std::size_t k = 0; k < clouds.size(); ++k) refs.push_back(direct_reference(clouds[k], m, unsigned(30 + k)));
+    int turn = 0;
     for (double t : {1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-10, 1e-12}) {
       const TreeParameters p = tree_parameters(t, m);
       CHECK(tree_error_model(p, m) <= t);
+      const int this_turn = turn++;
       for (int leaf : {32, 64, 128}) {
+        if (!every_leaf && leaf != (32 << (this_turn % 3))) continue;
         TreeParameters q = p;
         q.leaf_size = leaf;
         TreeFarField tree = make_tree(m, q);
