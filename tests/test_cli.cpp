@@ -409,6 +409,24 @@ TEST_CASE("plot writes one PNG of a short periodic run") {
   CHECK(bad.status == 4);
 }
 
+TEST_CASE("plot draws an open channel's trajectory, whose empty slots hold NaN") {
+  // [inflow] keeps `capacity` slots per frame; the empty ones (id -1) are NaN and are left out (before
+  // 2026-12-02 they made the snapshot's limits NaN and the plot failed).
+  const fs::path scene = write_scene("open_plot.toml",
+                                     "[walls]\nkind = \"outline\"\noutline = [[0, -5], [30, -5], [30, 5], [0, 5]]\n"
+                                     "openings = [1, 3]\ninlet = 3\n"
+                                     "[particles]\npositions = [[5.0, 0.0, 0.0], [15.0, 2.0, 0.0]]\n"
+                                     "[inflow]\nareal_fraction = 0.05\ncapacity = 12\n"
+                                     "[flow]\nkind = \"poiseuille\"\nmean_velocity = 1.0\n"
+                                     "[hydrodynamics]\nmodel = \"free_draining\"\n"
+                                     "[time]\ndt = 0.1\nsteps = 10\n[output]\nevery = 5\n");
+  const fs::path traj = scratch() / "open_plot.h5", png = scratch() / "open_plot.png";
+  REQUIRE(cli("run " + scene.string() + " --quiet --threads 1 --out " + traj.string()).status == 0);
+  const Result r = cli("plot " + traj.string() + " --out " + png.string());
+  CHECK_MESSAGE(r.status == 0, r.err);
+  CHECK(fs::exists(png));
+}
+
 TEST_CASE("average: the window in strain, time or fractions selects the frames; the mean is theirs; errors") {
   // Two spheres in simple shear (rate 2) in a periodic box, far field FTS, 20 steps of 0.05, a
   // frame per step: strain 2 t, frames at t = 0, 0.05, ..., 1.

@@ -103,6 +103,58 @@ TEST_CASE("outline flow: a straight outline carries plane Poiseuille flow and it
   CHECK(tf.velocity(Vec3(20.0, 6.0, 0.0)).norm() == 0.0);
 }
 
+TEST_CASE("outline flow: a channel inclined to the grid carries plane Poiseuille flow along its axis") {
+  // Walls of slope 1/2 (26.6 degrees to the grid) between vertical openings 10 a high at x = 0 and
+  // 60: width w = 10 cos(theta) = 8.94 a normal to the walls, flux Q = 10 a^2/time. Away from the
+  // openings (whose imposed profiles are normal to them, not along the axis: their disturbance is
+  // 4e-4 u_max at x = 15 and 45 with h = 0.25, 4e-3 at x = 10 and 50) the flow is plane Poiseuille
+  // along the axis t: u = (3/2)(Q/w)(1 - (2 n / w)^2) t, n the distance from the axis. Every node
+  // with 20 <= x <= 40.
+  const Outline o = make_outline(outline({{0, 0}, {60, 30}, {60, 40}, {0, 10}}, {1, 3}, 3));
+  const Vec2 t = Vec2(2.0, 1.0).normalized(), nrm(-t.y(), t.x());
+  const double w = 10.0 * t.x(), umax = 1.5 * 10.0 / w;
+  double prev = 0;
+  for (double h : {1.0, 0.5, 0.25}) {
+    const OutlineFlow f = solve_outline_flow(o, 1.0, h);
+    double err = 0, err_deep = 0;
+    for (std::size_t j = 0; j < f.grid.axis[1].size(); ++j)
+      for (std::size_t i = 0; i < f.grid.axis[0].size(); ++i) {
+        const Vec2 p(f.grid.axis[0][i], f.grid.axis[1][j]);
+        if (p.x() < 20 || p.x() > 40 || !o.contains(p)) continue;
+        const double n = (p - Vec2(0.0, 5.0)).dot(nrm);  // the axis passes through (0, 5)
+        const Vec2 exact = umax * (1 - 4 * n * n / (w * w)) * t;
+        const Vec3 u = node_u(f.grid, i, j);
+        const double e = (Vec2(u.x(), u.y()) - exact).norm();
+        err = std::max(err, e);
+        if (o.distance(p) >= 1.0) err_deep = std::max(err_deep, e);
+      }
+    MESSAGE("inclined channel, h = " << h << ": max |u - u_Poiseuille| / u_max = " << err / umax << " (at >= 1 a from the walls "
+                                     << err_deep / umax << "), dp/mu = " << f.pressure_drop_over_mu);
+    // psi is a cubic in n, which the ghost closures and the stencil hold exactly; what is left is the
+    // central differences' error, (h^2/6) times the third derivative of psi along y and x:
+    // (h^2/6)(8 u_max/w^2)(cos^3 + sin^3).
+    const double bound = h * h / 6 * 8 * umax / (w * w) * (std::pow(t.x(), 3) + std::pow(t.y(), 3));
+    CHECK(err <= 1.02 * bound);
+    if (prev > 0) CHECK(prev / err > 3.0);
+    prev = err;
+  }
+}
+
+TEST_CASE("outline flow: a tapered contraction's pressure drop against lubrication theory") {
+  // 20 a wide for 0 <= x <= 40, tapering linearly (walls at 7.1 degrees) to 10 a over 40 <= x <= 80,
+  // then 10 a wide to x = 120. Lubrication theory: dp/dx = -12 mu Q / w(x)^3, so the drop is
+  // 12 Q [40/20^3 + (40/10)(1/10^2 - 1/20^2)/2 + 40/10^3] / mu; its corrections are O(slope^2) in
+  // the taper (Jeffery-Hamel) and the local losses at the taper's ends, each under 1 % here.
+  const Outline o = make_outline(
+      outline({{0, -10}, {40, -10}, {80, -5}, {120, -5}, {120, 5}, {80, 5}, {40, 10}, {0, 10}}, {3, 7}, 7));
+  const double Q = 20.0, lubrication = 12 * Q * (40.0 / 8000 + 4.0 * (0.01 - 0.0025) / 2 + 40.0 / 1000);
+  for (double h : {0.5, 0.25}) {
+    const OutlineFlow f = solve_outline_flow(o, 1.0, h);
+    MESSAGE("tapered contraction, h = " << h << ": dp/mu = " << f.pressure_drop_over_mu << ", lubrication " << lubrication);
+    CHECK(f.pressure_drop_over_mu == doctest::Approx(lubrication).epsilon(0.01));
+  }
+}
+
 TEST_CASE("outline flow: equal outlet pressures split a T by its arms' resistance") {
   const OutlineFlow sym = solve_outline_flow(make_outline(tee(40, 40)), 1.0, 0.5);
   CHECK(sym.flux[0] == doctest::Approx(-10.0));
@@ -194,10 +246,17 @@ TEST_CASE("outline scenes: monolayer fill, resolved round trip, errors name the 
 
   CHECK_THROWS_WITH(io::parse_scene(base + "[particles]\npositions = [[60.0, 30.0, 0.0]]\n", "tj.toml"),
                     doctest::Contains("lies outside the fluid region"));
+  // An oblique wall is solved (a side branch widening to its outlet); an oblique opening is refused.
   std::string oblique = base;
   oblique.replace(oblique.find("[50, -40]"), 9, "[45, -40]");
-  CHECK_THROWS_WITH(io::parse_scene(oblique + "[particles]\npositions = [[10.0, 10.0, 0.0]]\n", "tj.toml"),
-                    doctest::Contains("[flow] kind: the flow through an outline is solved for edges parallel to x or y; edge 1"));
+  const Scene widening = io::parse_scene(oblique + "[particles]\npositions = [[10.0, 10.0, 0.0]]\n", "tj.toml");
+  CHECK(widening.flow.outline);
+  CHECK(widening.flow.outline->flux[2] > 0);
+  CHECK(widening.flow.outline->flux[5] > 0);
+  std::string oblique_opening = base;
+  oblique_opening.replace(oblique_opening.find("[70, -40]"), 9, "[70, -35]");
+  CHECK_THROWS_WITH(io::parse_scene(oblique_opening + "[particles]\npositions = [[10.0, 10.0, 0.0]]\n", "tj.toml"),
+                    doctest::Contains("[flow] kind: the flow through an outline takes openings parallel to x or y (walls may be oblique); opening 2"));
   std::string bad_inlet = base;
   bad_inlet.replace(bad_inlet.find("inlet = 7"), 9, "inlet = 1");
   CHECK_THROWS_WITH(io::parse_scene(bad_inlet + "[particles]\npositions = [[10.0, 10.0, 0.0]]\n", "tj.toml"),

@@ -105,6 +105,18 @@ def main():
         a = np.asarray(f["particles/all/radius/value"][frame], dtype=float) if "particles/all/radius" in f else np.ones(n)
         u = np.asarray(f["particles/all/velocity/value"][frame], dtype=float) if "particles/all/velocity" in f else None
         A = lattice(f, frame, n_frames)
+        # Open channels keep a slot per possible particle; an empty slot (id -1) holds NaN.
+        slots = n
+        present = np.all(np.isfinite(x), axis=1)
+        if "particles/all/id" in f:
+            present &= np.asarray(f["particles/all/id/value"][frame]) >= 0
+        if not present.all():
+            x, a = x[present], a[present]
+            u = u[present] if u is not None else None
+            n = int(present.sum())
+            if n == 0:
+                sys.stderr.write(f"stokesian_plot.py: {args.trajectory}: frame {frame} has no particle (all {slots} slots empty)\n")
+                return 4
         obs = {}
         if "observables" in f:
             def visit(name, obj):
@@ -119,7 +131,8 @@ def main():
     fig = plt.figure(figsize=(16, 9), dpi=100)
     outer = fig.add_gridspec(1, 3, width_ratios=[1.0, 1.0, 1.45], wspace=0.28, left=0.05, right=0.95, top=0.9, bottom=0.07)
     fig.suptitle(
-        f"{os.path.basename(args.trajectory)}: {n} particles, {n_frames} frames, snapshot frame {frame} "
+        f"{os.path.basename(args.trajectory)}: {n} particles" + (f" (of {slots} slots)" if slots != n else "") +
+        f", {n_frames} frames, snapshot frame {frame} "
         f"(step {step_frame}, t = {t_frame:.4g})\n{model}",
         fontsize=11,
     )

@@ -3,6 +3,7 @@
 #include <Eigen/SparseLU>
 #include <Eigen/Sparse>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <deque>
 #include <limits>
@@ -12,6 +13,9 @@
 namespace stokesian {
 
 namespace {
+
+// Fluid nodes closer than kSnap h to an oblique wall are set to the wall's psi (header).
+constexpr double kSnap = 0.25;
 
 double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
 
@@ -238,10 +242,10 @@ double outline_grid_spacing(const Outline& o, double h) {
   for (const Vec2& p : o.v) mn = mn.cwiseMin(p);
   for (std::size_t k = 0; k < o.edges(); ++k) {
     const Vec2 d = o.b(k) - o.a(k);
-    if (std::abs(d.x()) > 1e-9 && std::abs(d.y()) > 1e-9) {
+    if (o.open[k] && std::abs(d.x()) > 1e-9 && std::abs(d.y()) > 1e-9) {
       std::ostringstream s;
-      s << "the flow through an outline is solved for edges parallel to x or y; edge " << k << " from ("
-        << o.a(k).transpose() << ") to (" << o.b(k).transpose() << ") is oblique";
+      s << "the flow through an outline takes openings parallel to x or y (walls may be oblique); opening " << k
+        << " from (" << o.a(k).transpose() << ") to (" << o.b(k).transpose() << ") is oblique";
       throw std::invalid_argument(s.str());
     }
   }
@@ -288,7 +292,17 @@ OutlineFlow solve_outline_flow(const Outline& o, double mean_velocity, double h_
   auto id = [&](long i, long j) { return std::size_t(j * nx + i); };
   const std::size_t N = std::size_t(nx * ny);
 
-  // Node roles: 0 outside, 1 fluid, 2 boundary (on an edge; `edge` names one).
+  // Oblique wall edges, and for each wall edge a grid node on it (its first vertex) whose psi is the
+  // wall's constant.
+  std::vector<char> oblique(o.edges(), 0);
+  std::vector<std::size_t> wall_node(o.edges(), N);
+  for (std::size_t k = 0; k < o.edges(); ++k) {
+    const Vec2 d = o.b(k) - o.a(k);
+    oblique[k] = std::abs(d.x()) > 1e-9 * h && std::abs(d.y()) > 1e-9 * h;
+    wall_node[k] = id(std::lround((o.a(k).x() - mn.x()) / h), std::lround((o.a(k).y() - mn.y()) / h));
+  }
+  // Node roles: 0 outside, 1 fluid, 2 boundary (on an edge, or snapped to an oblique wall; `edge`
+  // names one).
   std::vector<signed char> role(N, 0);
   std::vector<int> edge(N, -1);
   for (long j = 0; j < ny; ++j)
@@ -300,7 +314,16 @@ OutlineFlow solve_outline_flow(const Outline& o, double mean_velocity, double h_
           if (edge[id(i, j)] < 0 || !o.open[k]) edge[id(i, j)] = int(k);
           role[id(i, j)] = 2;
         }
-      if (role[id(i, j)] == 0 && o.contains(p)) role[id(i, j)] = 1;
+      if (role[id(i, j)] == 0 && o.contains(p)) {
+        role[id(i, j)] = 1;
+        // A fluid node closer than kSnap h to an oblique wall takes the wall's value (header).
+        for (std::size_t k = 0; k < o.edges(); ++k)
+          if (oblique[k] && segment_distance(p, o.a(k), o.b(k)) < kSnap * h) {
+            role[id(i, j)] = 2;
+            edge[id(i, j)] = int(k);
+            break;
+          }
+      }
     }
   std::vector<long> unknown(N, -1);
   long nu = 0;
@@ -344,30 +367,88 @@ OutlineFlow solve_outline_flow(const Outline& o, double mean_velocity, double h_
     s << "the outline is narrower than three grid spacings near (" << pos(i, j).transpose() << "); give a smaller grid_spacing";
     return std::invalid_argument(s.str());
   };
+  // The ghost value at node (i + di, j + dj), outside the fluid, seen from fluid node (i, j): the
+  // cubic along the ray with psi = psi_b and zero slope where the ray leaves the fluid (distance d
+  // in steps of the ray, d in (0, m], m = max(|di|, |dj|)) through the two nodes behind that point
+  // (header); as weights on grid nodes, the boundary value by a node holding it.
+  struct Weight {
+    std::size_t node = 0;
+    double w = 0;
+  };
+  struct Ghost {
+    std::array<Weight, 3> weight;
+    int count = 0;
+    const Weight* begin() const { return weight.data(); }
+    const Weight* end() const { return weight.data() + count; }
+  };
+  auto ghost = [&](long i, long j, int di, int dj) {
+    const int m = std::max(std::abs(di), std::abs(dj));
+    const Vec2 P = pos(i, j), T = pos(i + di, j + dj);
+    double d = std::numeric_limits<double>::infinity();
+    std::size_t crossed = o.edges();
+    for (std::size_t k = 0; k < o.edges(); ++k) {
+      // P + t (T - P) on edge k, t in [0, 1].
+      const Vec2 r = T - P, sdir = o.b(k) - o.a(k);
+      const double den = cross2(r, sdir);
+      if (std::abs(den) < 1e-14 * r.norm() * sdir.norm()) continue;
+      const double t = cross2(o.a(k) - P, sdir) / den, u = cross2(o.a(k) - P, r) / den;
+      if (t < -1e-12 || t > 1 + 1e-12 || u < -1e-9 || u > 1 + 1e-9) continue;
+      if (t * m < d) {
+        d = t * m;
+        crossed = k;
+      }
+    }
+    if (crossed == o.edges()) throw narrow(i, j);
+    std::size_t boundary = N;
+    const long dr = std::lround(d);
+    if (std::abs(d - double(dr)) < 1e-9 && dr >= 1 && role_at(i + dr * di / m, j + dr * dj / m) == 2)
+      boundary = id(i + dr * di / m, j + dr * dj / m);  // the ray leaves through a boundary node
+    else if (!o.open[crossed]) boundary = wall_node[crossed];
+    else throw narrow(i, j);  // an opening between grid nodes (openings run along grid lines)
+    long s1 = long(std::ceil(d - 1e-9)) - 1;
+    if (d - double(s1) < kSnap) --s1;
+    const long s2 = s1 - 1;
+    auto node_at = [&](long s) { return std::pair<long, long>{i + s * di / m, j + s * dj / m}; };
+    const auto [i1, j1] = node_at(s1);
+    const auto [i2, j2] = node_at(s2);
+    if (role_at(i1, j1) == 0) throw narrow(i, j);
+    const double x1 = double(s1) - d, xg = double(m) - d;
+    Ghost g;
+    if (role_at(i2, j2) == 0) {
+      // No second node behind (an acute corner): the quadratic with zero slope at the wall.
+      const double c1 = (xg * xg) / (x1 * x1);
+      g.weight[0] = {id(i1, j1), c1};
+      g.weight[1] = {boundary, 1.0 - c1};
+      g.count = 2;
+    } else {
+      // psi_g - psi_b = c1 (psi_1 - psi_b) + c2 (psi_2 - psi_b), from a2 x^2 + a3 x^3 through both.
+      const double x2 = double(s2) - d;
+      const double det = x1 * x1 * x2 * x2 * x2 - x1 * x1 * x1 * x2 * x2;
+      const double c1 = (xg * xg * x2 * x2 * x2 - xg * xg * xg * x2 * x2) / det;
+      const double c2 = (xg * xg * xg * x1 * x1 - xg * xg * x1 * x1 * x1) / det;
+      g.weight[0] = {id(i1, j1), c1};
+      g.weight[1] = {id(i2, j2), c2};
+      g.weight[2] = {boundary, 1.0 - c1 - c2};
+      g.count = 3;
+    }
+    return g;
+  };
   for (long j = 0; j < ny; ++j)
     for (long i = 0; i < nx; ++i) {
       if (role[id(i, j)] != 1) continue;
       const long row = unknown[id(i, j)];
-      auto add = [&](long ii, long jj, double c) {
-        const int r = role_at(ii, jj);
-        if (r == 1) trip.emplace_back(row, unknown[id(ii, jj)], c);
-        else if (r == 2) known[std::size_t(row)].push_back({id(ii, jj), -c});
+      auto add = [&](std::size_t n, double c) {
+        if (role[n] == 1) trip.emplace_back(row, unknown[n], c);
+        else if (role[n] == 2) known[std::size_t(row)].push_back({n, -c});
         else throw narrow(i, j);
       };
       for (const Tap& t : taps) {
         const long ii = i + t.di, jj = j + t.dj;
         if (role_at(ii, jj) != 0) {
-          add(ii, jj, t.c);
+          add(id(ii, jj), t.c);
           continue;
         }
-        // A ghost: an arm point two out with the boundary between (walls on grid lines admit no other).
-        const bool arm2 = (std::abs(t.di) == 2 && t.dj == 0) || (std::abs(t.dj) == 2 && t.di == 0);
-        const long bi = i + t.di / 2, bj = j + t.dj / 2;
-        if (!arm2 || role_at(bi, bj) != 2) throw narrow(i, j);
-        // psi_g = 3 psi_1 - psi_2 / 2 - 3 psi_b / 2: psi_1 this node, psi_2 one further in.
-        add(i, j, 3.0 * t.c);
-        add(i - t.di / 2, j - t.dj / 2, -0.5 * t.c);
-        add(bi, bj, -1.5 * t.c);
+        for (const Weight& g : ghost(i, j, t.di, t.dj)) add(g.node, t.c * g.w);
       }
     }
   Eigen::SparseMatrix<double> A(nu, nu);
@@ -391,22 +472,27 @@ OutlineFlow solve_outline_flow(const Outline& o, double mean_velocity, double h_
     return psi;
   };
 
-  // lap psi at fluid nodes (5-point; neighbours are fluid or boundary).
+  // lap psi at fluid nodes whose four neighbours are fluid or boundary (5-point).
+  auto laplacian_known = [&](long i, long j) {
+    return i >= 1 && j >= 1 && i + 1 < nx && j + 1 < ny && role[id(i, j)] == 1 && role[id(i + 1, j)] != 0 &&
+           role[id(i - 1, j)] != 0 && role[id(i, j + 1)] != 0 && role[id(i, j - 1)] != 0;
+  };
   auto laplacian = [&](const std::vector<double>& psi) {
     std::vector<double> L(N, std::numeric_limits<double>::quiet_NaN());
     for (long j = 1; j + 1 < ny; ++j)
       for (long i = 1; i + 1 < nx; ++i)
-        if (role[id(i, j)] == 1)
+        if (laplacian_known(i, j))
           L[id(i, j)] = (psi[id(i + 1, j)] + psi[id(i - 1, j)] + psi[id(i, j + 1)] + psi[id(i, j - 1)] - 4 * psi[id(i, j)]) / (h * h);
     return L;
   };
-  // Deep nodes: fluid with all eight neighbours fluid (lap psi known around them).
+  // Deep nodes: fluid with all eight neighbours fluid and lap psi known at the four beside them.
   std::vector<char> deep(N, 0);
   for (long j = 1; j + 1 < ny; ++j)
     for (long i = 1; i + 1 < nx; ++i) {
       bool d = role[id(i, j)] == 1;
       for (int dj = -1; d && dj <= 1; ++dj)
         for (int di = -1; d && di <= 1; ++di) d = role[id(i + di, j + dj)] == 1;
+      d = d && laplacian_known(i + 1, j) && laplacian_known(i - 1, j) && laplacian_known(i, j + 1) && laplacian_known(i, j - 1);
       deep[id(i, j)] = d;
     }
   // The deep node nearest each opening's centre and its distance to the opening's line.
@@ -507,7 +593,14 @@ OutlineFlow solve_outline_flow(const Outline& o, double mean_velocity, double h_
     for (long i = 0; i < nx; ++i) {
       const std::size_t n = id(i, j);
       if (role[n] == 1) {
-        G.u[n] = Vec3((psi[id(i, j + 1)] - psi[id(i, j - 1)]) / (2 * h), -(psi[id(i + 1, j)] - psi[id(i - 1, j)]) / (2 * h), 0.0);
+        // A neighbour outside the fluid (beside an oblique wall) takes its ghost value.
+        auto value = [&](int di, int dj) {
+          if (role_at(i + di, j + dj) != 0) return psi[id(i + di, j + dj)];
+          double v = 0;
+          for (const Weight& g : ghost(i, j, di, dj)) v += g.w * psi[g.node];
+          return v;
+        };
+        G.u[n] = Vec3((value(0, 1) - value(0, -1)) / (2 * h), -(value(1, 0) - value(-1, 0)) / (2 * h), 0.0);
       } else if (role[n] == 2 && o.open[std::size_t(edge[n])]) {
         const std::size_t k = std::size_t(edge[n]);
         const double s = (pos(i, j) - o.a(k)).norm() / o.length(k);

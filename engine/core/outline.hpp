@@ -19,12 +19,20 @@
 // P_jm (pressure at outlet m when only outlet j is open); the combination sum_j alpha_j P_jm is
 // equal at all outlets. The solution is that combination's solve.
 //
-// Discretisation: a uniform grid of spacing h on which every vertex lies, edges parallel to the
-// axes (so the boundary runs along grid lines: no staircase error). Fluid nodes carry psi; the
-// 13-point stencil of lap^2 (O(h^2)) reaches at most two nodes out; a node beyond the boundary is
-// a ghost, psi_g = 3 psi_1 - psi_2 / 2 - 3 psi_b / 2 (psi_b on the boundary, psi_1 and psi_2 the
-// nodes one and two spacings inside: the cubic through them with d psi/dn = 0 at the boundary,
-// exact for a fully developed flow). The system is solved by sparse LU.
+// Discretisation: a uniform grid of spacing h on which every vertex lies; openings parallel to the
+// axes, walls parallel or oblique. Fluid nodes carry psi; the 13-point stencil of lap^2 (O(h^2))
+// reaches at most two nodes out. A stencil node beyond the boundary is a ghost: along the ray from
+// the centre node through it, the boundary is crossed at distance d (in the ray's grid steps), where
+// psi = psi_b and, psi being constant along a wall with d psi/dn = 0, the whole gradient vanishes;
+// the ghost value is the cubic psi_b + a2 x^2 + a3 x^3 (x = s - d along the ray) through the two
+// nodes s1 < d - kSnap and s1 - 1 behind that point, evaluated at the ghost's s (exact for a fully
+// developed flow, cubic in the distance from the wall, at any inclination). A boundary on a grid
+// line (d = 1 from a node beside it) gives psi_g = 3 psi_1 - psi_2 / 2 - 3 psi_b / 2. At an acute
+// corner with no second node behind, the quadratic with zero slope. Fluid nodes closer than
+// kSnap h = h/4 to an oblique wall take psi_b (their error (kSnap h)^2 |psi''| / 2, of the scheme's
+// order; nearer nodes would make the extrapolation ill-conditioned). The system is solved by sparse
+// LU. A particle sampling the grid within one cell of an oblique wall sees the interpolation toward
+// the zero velocity of the nodes beyond it.
 // Nodal velocities are central differences of psi (O(h^2)); on walls u = 0, on openings the
 // parabolic profile. The pressure follows from grad p = mu lap u: dp/dx = mu d(lap psi)/dy,
 // dp/dy = -mu d(lap psi)/dx, integrated (trapezoid) along grid paths through nodes whose eight
@@ -114,7 +122,7 @@ struct OutlineFlow {
 
 // Solves for mean inlet velocity U [a/time] on a grid of spacing h [a] (h = 0: the inlet width /
 // 40, refined until every vertex lies on the grid). Throws std::invalid_argument when the outline
-// has an oblique edge, a vertex off the grid, or a passage narrower than three grid spacings.
+// has an oblique opening, a vertex off the grid, or a passage too narrow for the stencil.
 OutlineFlow solve_outline_flow(const Outline& o, double mean_velocity, double h);
 
 // The grid spacing solve_outline_flow uses for a requested h (0 = automatic).
