@@ -27,8 +27,9 @@
 //               perp_sup (the single walls superposed; equal to the references for the plane);
 //       kind 1: phi, seed, eta (centre height y - c_y), Dpar, Dperp, N (interior);
 //       kind 2: phi, seed, N, seconds;  kind 3: the slit's references on a fine grid of h.
-// Usage: validate_slit [--quick] [--out DIR]; --quick: the slit at h = 3 and 15, and phi = 0.1 with
-// one configuration (a smoke run). Full: about 10 min on 2 cores.
+// Usage: [BENCH_SLIT_SEEDS=K] validate_slit [--quick] [--out DIR]; --quick: the slit at h = 3 and
+// 15, and phi = 0.1 with one configuration (a smoke run). Full: K = 3 configurations per phi (seeds
+// 1..K), about 10 min on 2 cores; K = 12 about 45 min.
 #include "bench/harness.hpp"
 #include "engine/core/channel.hpp"
 #include "engine/hydrodynamics.hpp"
@@ -38,7 +39,9 @@
 #include "tests/support/wall_mobility.hpp"
 #include "trees/walls.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <sstream>
 
@@ -107,7 +110,9 @@ int main(int argc, char** argv) {
 
   // Self-diffusivity across a 6 a slit.
   const std::vector<double> phis = opt.quick ? std::vector<double>{0.1} : std::vector<double>{0.1, 0.25, 0.4};
-  const int seeds = opt.quick ? 1 : 3;
+  // Configurations per phi: 3, or BENCH_SLIT_SEEDS (1-100).
+  const char* seeds_env = std::getenv("BENCH_SLIT_SEEDS");
+  const int seeds = opt.quick ? 1 : (seeds_env ? std::clamp(std::atoi(seeds_env), 1, 100) : 3);
   for (double phi : phis)
     for (int seed = 1; seed <= seeds; ++seed) {
       std::ostringstream scene;
