@@ -385,6 +385,15 @@ rate = 1.0
   CHECK(d.closing_speed == doctest::Approx((r.y() - r.x() * r.y()) / r.norm()).epsilon(1e-9));
 }
 
+// Runs `scene` to `traj`, plots it to `png` with `options` and checks a PNG was written.
+static void run_and_plot(const fs::path& scene, const fs::path& traj, const fs::path& png, const std::string& options = "") {
+  REQUIRE(cli("run " + scene.string() + " --quiet --threads 1 --out " + traj.string()).status == 0);
+  const Result r = cli("plot " + traj.string() + " --out " + png.string() + options);
+  CHECK_MESSAGE(r.status == 0, r.err);
+  REQUIRE(fs::exists(png));
+  CHECK(read_text(png).substr(0, 8) == std::string("\x89PNG\r\n\x1a\n", 8));
+}
+
 TEST_CASE("plot writes one PNG of a short periodic run") {
   const fs::path scene = write_scene(
       "plot.toml",
@@ -394,12 +403,7 @@ TEST_CASE("plot writes one PNG of a short periodic run") {
       "[hydrodynamics]\nmodel = \"free_draining\"\n"
       "[time]\ndt = 0.05\nsteps = 6\n[output]\nevery = 2\n");
   const fs::path traj = scratch() / "plot.h5", png = scratch() / "chart.png";
-  REQUIRE(cli("run " + scene.string() + " --quiet --threads 1 --out " + traj.string()).status == 0);
-  const Result r = cli("plot " + traj.string() + " --out " + png.string() + " --projection xz");
-  CHECK_MESSAGE(r.status == 0, r.err);
-  REQUIRE(fs::exists(png));
-  const std::string head = read_text(png).substr(0, 8);
-  CHECK(head == std::string("\x89PNG\r\n\x1a\n", 8));
+  run_and_plot(scene, traj, png, " --projection xz");
   // A frame the file does not have: a usage error naming the frames there are.
   const Result frame = cli("plot " + traj.string() + " --out " + png.string() + " --frame 4");
   CHECK(frame.status == 1);
@@ -420,11 +424,7 @@ TEST_CASE("plot draws an open channel's trajectory, whose empty slots hold NaN")
                                      "[flow]\nkind = \"poiseuille\"\nmean_velocity = 1.0\n"
                                      "[hydrodynamics]\nmodel = \"free_draining\"\n"
                                      "[time]\ndt = 0.1\nsteps = 10\n[output]\nevery = 5\n");
-  const fs::path traj = scratch() / "open_plot.h5", png = scratch() / "open_plot.png";
-  REQUIRE(cli("run " + scene.string() + " --quiet --threads 1 --out " + traj.string()).status == 0);
-  const Result r = cli("plot " + traj.string() + " --out " + png.string());
-  CHECK_MESSAGE(r.status == 0, r.err);
-  CHECK(fs::exists(png));
+  run_and_plot(scene, scratch() / "open_plot.h5", scratch() / "open_plot.png");
 }
 
 TEST_CASE("average: the window in strain, time or fractions selects the frames; the mean is theirs; errors") {
