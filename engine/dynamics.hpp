@@ -25,6 +25,9 @@ struct Evaluation {
   // The step from this state samples the Brownian stresslet (engine/stress.hpp; every
   // [brownian] stress_every steps where the stress is recorded: Simulation::samples_brownian_stress).
   bool sample_brownian_stress = false;
+  // The iterative solver's last iterate of this evaluation's solve (engine/core/layout.hpp): the
+  // integrator's stages of the same step start from it.
+  WarmStart warm;
 };
 
 class Dynamics {

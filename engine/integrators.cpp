@@ -85,7 +85,8 @@ StepResult EulerIntegrator::step(const State& s, const Evaluation& start, Dynami
 StepResult MidpointIntegrator::step(const State& s, const Evaluation& start, Dynamics& d, Rng& rng) {
   const double dt = s.dt;
   const std::vector<Vec3> xmid = axpy(s.position, 0.5 * dt, start.hydro.U);
-  StepResult r{axpy(s.position, dt, d.evaluate(s, xmid, 0.5 * dt).hydro.U), dt, dt, {}};
+  WarmStart warm = start.warm;
+  StepResult r{axpy(s.position, dt, d.evaluate(s, xmid, 0.5 * dt, nullptr, &warm).hydro.U), dt, dt, {}};
   add_noise(s, d, dt, rng, r.x);
   return r;
 }
@@ -96,7 +97,8 @@ StepResult FixmanIntegrator::step(const State& s, const Evaluation& start, Dynam
   // First stage at x0: the deterministic solve of `start` is reused when athermal.
   if (!xi.size()) {
     const std::vector<Vec3> xmid = axpy(s.position, 0.5 * dt, start.hydro.U);
-    return StepResult{axpy(s.position, dt, d.evaluate(s, xmid, 0.5 * dt).hydro.U), dt, dt, {}};
+    WarmStart warm = start.warm;
+    return StepResult{axpy(s.position, dt, d.evaluate(s, xmid, 0.5 * dt, nullptr, &warm).hydro.U), dt, dt, {}};
   }
   // Brownian stresslet (engine/stress.hpp): (A(x') - A(x0)) xi, A = dS/dF (S the stresslets exerted
   // on the fluid), whose mean by the expansion above is kT d_k A_{.k} = -S^B. The responses to xi
@@ -110,7 +112,7 @@ StepResult FixmanIntegrator::step(const State& s, const Evaluation& start, Dynam
   // from each other. The full solves are the same whether or not the step samples, so sampling
   // leaves the trajectory unchanged; iterative solvers start from zero again at the next step.
   const bool sample = start.sample_brownian_stress;  // FTS in periodic boxes only (resolve_model)
-  WarmStart full;
+  WarmStart full;  // not start.warm: start is solved on frame steps only, and the trajectory must not depend on them
   const HydroResult h0 = d.evaluate(s, s.position, 0.0, &xi, &full).hydro;
   WarmStart noise = full;
   const HydroResult a0 = sample ? d.noise_response(s, s.position, 0.0, xi, &noise) : HydroResult{};

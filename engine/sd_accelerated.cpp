@@ -318,10 +318,11 @@ HydroResult AcceleratedStokesianDynamics::solve(const HydroProblem& p) {
         << near_stats_.min_xi;
     throw PhysicsError(o.str());
   };
-  // Warm start (engine/core/layout.hpp): the caller's iterate of a related solve, without held
-  // particles (their error-estimated passes compare iterates of one run from zero).
+  // Warm start (engine/core/layout.hpp): the caller's iterate of a related solve. With held
+  // particles it is the preconditioned iterate y (W = P^-1 y); their error-estimated passes compare
+  // iterates of one run from wherever it started, and the error of each is set by its residual.
   const bool held = any_fixed(p.fixed);
-  const bool warm = p.warm && !held && method_ == Method::gmres && p.warm->iterate.size() == n;
+  const bool warm = p.warm && method_ == Method::gmres && p.warm->iterate.size() == n;
   VecX Y = warm ? p.warm->iterate : VecX::Zero(n);
   KrylovResult kr;
   HydroResult res;
@@ -405,7 +406,7 @@ HydroResult AcceleratedStokesianDynamics::solve(const HydroProblem& p) {
   stats_.seconds_krylov = seconds_since(t0);
   res.iterations = iterations;
   res.regularised_pairs = near_stats_.regularised;
-  if (p.warm) p.warm->iterate = held ? VecX() : Y;
+  if (p.warm) p.warm->iterate = Y;
   return res;
 }
 

@@ -89,6 +89,11 @@ Evaluation Simulation::evaluate(const State& s, const std::vector<Vec3>& x, doub
   return evaluate_checked(s, x, t, diagnostics, nullptr);
 }
 
+Evaluation Simulation::evaluate_step_start(const State& s) {
+  GapSurvey overlaps;
+  return evaluate_checked(s, s.position, 0.0, false, &overlaps, nullptr, integrator_->reads_start_solve(model_.brownian));
+}
+
 Evaluation Simulation::evaluate(const State& s, const std::vector<Vec3>& x, double t, const VecX* noise,
                                 WarmStart* warm) {
   return evaluate_checked(s, x, t, false, nullptr, noise, true, warm);
@@ -180,7 +185,7 @@ Evaluation Simulation::evaluate_checked(const State& s, const std::vector<Vec3>&
 
   const auto t0 = std::chrono::steady_clock::now();
   try {
-    if (solve) ev.hydro = hydro_.solve(c, s.fixed, ev.force, ev.torque, noise, warm);
+    if (solve) ev.hydro = hydro_.solve(c, s.fixed, ev.force, ev.torque, noise, warm ? warm : &ev.warm);
     if (solve) keep_in_plane(ev.hydro);
   } catch (const PhysicsError& e) {
     throw PhysicsError(at() + ": " + e.what() + closest_pairs(x, s.radius, domain));

@@ -48,6 +48,10 @@ class Simulation final : public Dynamics {
     return evaluate(s, x, t, false);
   }
   Evaluation evaluate(const State& s, const std::vector<Vec3>& x, double t, bool diagnostics);
+  // The evaluation run() makes at the start of a step that writes no frame: the deterministic solve
+  // only where the integrator reads it (the Fixman step with noise solves with F + xi itself), with
+  // the overlap policy's check. Benchmarks time a step as this plus advance().
+  Evaluation evaluate_step_start(const State& s);
   Evaluation evaluate(const State& s, const std::vector<Vec3>& x, double t, const VecX* noise,
                       WarmStart* warm = nullptr) override;
   std::vector<Vec3> brownian_displacement(const State& s, double dt, Rng& rng) override;
