@@ -16,12 +16,16 @@
 // particles' far-field block stays the same from one configuration to the next and its factor is
 // kept (engine/sd_dense.hpp); under shear the Lees-Edwards strain changes it at every stage.
 // Rows: solver (0 dense, 1 accelerated), N, fraction, N_I, threads, shear (1 sheared, 0 still);
-// phases: seconds (per step). The plot script fits exponents per solver, shear and fraction and
+// phases: seconds (per step); accelerated SD also its named phases per step from the solver's sums
+// (AcceleratedSdStats::totals): far_field_setup, near_field_assembly, factorisation,
+// held_preconditioner, krylov, far_noise, near_noise [s], and solves, gmres_iterations,
+// lanczos_iterations. The plot script fits exponents per solver, shear and fraction and
 // the speed-up from the constraint (time at fraction 1 over time at fraction f, same N).
 // Usage: bench_channel [--quick] [--out DIR]; full: N = 100 ... 10000 (dense to 500), 3 steps;
 // --quick: N = 60, 150, 1 step. BENCH_SOLVERS=dense (or accelerated) runs one solver only;
 // BENCH_N=n runs that N only.
 #include "bench/harness.hpp"
+#include "engine/sd_accelerated.hpp"
 #include "engine/simulation.hpp"
 #include "io/scene_toml.hpp"
 
@@ -31,6 +35,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <map>
 #include <sstream>
 
 using namespace stokesian;
@@ -80,6 +85,9 @@ int main(int argc, char** argv) {
           const Evaluation ev = sim.evaluate_step_start(s);
           sim.advance(s, ev);
         }
+        // Accelerated SD: the solver's sums over the timed steps (named phases, GMRES iterations).
+        const auto* asd = dynamic_cast<const AcceleratedStokesianDynamics*>(&sim.hydro_solver());
+        const AcceleratedSdStats::Totals before = asd ? asd->stats().totals : AcceleratedSdStats::Totals{};
         const auto t0 = std::chrono::steady_clock::now();
         for (int k = 0; k < steps; ++k) {
           const Evaluation ev = sim.evaluate_step_start(s);
@@ -91,9 +99,29 @@ int main(int argc, char** argv) {
         std::printf("%-11s %-7s N %5ld  interior fraction %.2f (N_I %5ld): %.4f s per step\n", se.solver,
                     se.shear ? "sheared" : "still", n, f, ni, sec);
         std::fflush(stdout);
+        std::map<std::string, double> ph{{"seconds", sec}};
+        if (asd) {
+          const AcceleratedSdStats::Totals& a = asd->stats().totals;
+          const double k = double(steps);
+          ph["far_field_setup"] = (a.far_field_setup - before.far_field_setup) / k;
+          ph["near_field_assembly"] = (a.near_field_assembly - before.near_field_assembly) / k;
+          ph["factorisation"] = (a.factorisation - before.factorisation) / k;
+          ph["held_preconditioner"] = (a.held_preconditioner - before.held_preconditioner) / k;
+          ph["krylov"] = (a.krylov - before.krylov) / k;
+          ph["far_noise"] = (a.far_noise - before.far_noise) / k;
+          ph["near_noise"] = (a.near_noise - before.near_noise) / k;
+          ph["solves"] = double(a.solves - before.solves) / k;
+          ph["gmres_iterations"] = double(a.iterations - before.iterations) / k;
+          ph["lanczos_iterations"] = double(a.lanczos_iterations - before.lanczos_iterations) / k;
+          std::printf("    per step: %.1f solves, %.1f GMRES iterations (%.4f s), Lanczos %.1f (%.4f s), near noise %.4f s, "
+                      "set-up %.4f s, held preconditioner %.4f s\n",
+                      ph["solves"], ph["gmres_iterations"], ph["krylov"], ph["lanczos_iterations"], ph["far_noise"],
+                      ph["near_noise"], ph["far_field_setup"] + ph["near_field_assembly"] + ph["factorisation"],
+                      ph["held_preconditioner"]);
+        }
         res.add({{"solver", solver == "dense" ? 0.0 : 1.0}, {"N", double(n)}, {"fraction", f}, {"N_I", double(ni)},
                  {"threads", double(omp_get_max_threads())}, {"shear", se.shear ? 1.0 : 0.0}},
-                {{"seconds", sec}});
+                ph);
       }
     }
   }

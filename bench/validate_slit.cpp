@@ -27,9 +27,12 @@
 //               perp_sup (the single walls superposed; equal to the references for the plane);
 //       kind 1: phi, seed, eta (centre height y - c_y), Dpar, Dperp, N (interior);
 //       kind 2: phi, seed, N, seconds;  kind 3: the slit's references on a fine grid of h.
-// Usage: [BENCH_SLIT_SEEDS=K] validate_slit [--quick] [--out DIR]; --quick: the slit at h = 3 and
-// 15, and phi = 0.1 with one configuration (a smoke run). Full: K = 3 configurations per phi (seeds
-// 1..K), about 10 min on 2 cores; K = 12 about 45 min.
+// Usage: [BENCH_SLIT_SEEDS=K] [BENCH_SLIT_PHI=phi] [BENCH_SLIT_SWEEPS=n] validate_slit [--quick]
+// [--out DIR]; --quick: the slit at h = 3 and 15, and phi = 0.1 with one configuration (a smoke
+// run). Full: K = 3 configurations per phi (seeds 1..K), about 10 min on 2 cores; K = 12 about
+// 45 min. BENCH_SLIT_PHI: that volume fraction only; BENCH_SLIT_SWEEPS: the placement's Monte Carlo
+// sweeps (0: random sequential addition alone); BENCH_SLIT_MIN_GAP: its hard-core margin [a]
+// (defaults: those of [particles]).
 #include "bench/harness.hpp"
 #include "engine/core/channel.hpp"
 #include "engine/hydrodynamics.hpp"
@@ -37,6 +40,7 @@
 #include "io/scene_toml.hpp"
 #include "lubrication/near_field.hpp"
 #include "tests/support/wall_mobility.hpp"
+#include "trees/placement.hpp"
 #include "trees/walls.hpp"
 
 #include <algorithm>
@@ -109,16 +113,25 @@ int main(int argc, char** argv) {
   }
 
   // Self-diffusivity across a 6 a slit.
-  const std::vector<double> phis = opt.quick ? std::vector<double>{0.1} : std::vector<double>{0.1, 0.25, 0.4};
+  std::vector<double> phis = opt.quick ? std::vector<double>{0.1} : std::vector<double>{0.1, 0.25, 0.4};
+  if (const char* e = std::getenv("BENCH_SLIT_PHI")) phis = {std::atof(e)};
   // Configurations per phi: 3, or BENCH_SLIT_SEEDS (1-100).
   const char* seeds_env = std::getenv("BENCH_SLIT_SEEDS");
   const int seeds = opt.quick ? 1 : (seeds_env ? std::clamp(std::atoi(seeds_env), 1, 100) : 3);
+  // Monte Carlo sweeps of the placement ([particles] equilibration_sweeps; default 100 there).
+  const char* sweeps_env = std::getenv("BENCH_SLIT_SWEEPS");
+  const long sweeps = sweeps_env ? std::atol(sweeps_env) : -1;
+  // The placement's hard-core margin ([particles] min_gap [a], default there 1e-3).
+  const char* gap_env = std::getenv("BENCH_SLIT_MIN_GAP");
+  const double min_gap = gap_env ? std::atof(gap_env) : PlacementParams{}.min_gap;
   for (double phi : phis)
     for (int seed = 1; seed <= seeds; ++seed) {
       std::ostringstream scene;
       scene << "[domain]\nkind = \"periodic\"\nbox = [16.4, 10.05, 16.4]\n[walls]\nkind = \"slit\"\nheight = 6.0\n"
-            << "[particles]\ngenerate = \"random\"\nvolume_fraction = " << phi << "\nseed = " << seed
-            << "\n[hydrodynamics]\nmodel = \"stokesian\"\nsolver = \"accelerated\"\nmoments = \"FTS\"\ntolerance = 1e-4\n";
+            << "[particles]\ngenerate = \"random\"\nvolume_fraction = " << phi << "\nseed = " << seed;
+      if (sweeps >= 0) scene << "\nequilibration_sweeps = " << sweeps;
+      if (gap_env) scene << "\nmin_gap = " << min_gap;
+      scene << "\n[hydrodynamics]\nmodel = \"stokesian\"\nsolver = \"accelerated\"\nmoments = \"FTS\"\ntolerance = 1e-4\n";
       const Scene s = io::parse_scene(scene.str(), "slit_diffusion.toml");
       const ResolvedModel m = resolve_model(s);
       Hydrodynamics h(m, 1.0, AmbientFlow{}, s.hydro.tolerance, lubrication::near_field_params(s.hydro, m.moments), 1.0);
@@ -141,7 +154,9 @@ int main(int argc, char** argv) {
       const double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       std::printf("diffusion phi %.2f seed %d: %zu interior spheres, %zu wall particles, %.1f s\n", phi, seed, ni,
                   s.wall_count, sec);
-      res.add({{"kind", 2}, {"phi", phi}, {"seed", double(seed)}, {"N", double(ni)}}, {{"seconds", sec}});
+      res.add({{"kind", 2}, {"phi", phi}, {"seed", double(seed)}, {"N", double(ni)},
+               {"sweeps", double(sweeps >= 0 ? sweeps : PlacementParams{}.equilibration_sweeps)}, {"min_gap", min_gap}},
+              {{"seconds", sec}});
     }
   std::printf("wrote %s\n", res.write(opt.out).c_str());
   return 0;

@@ -36,6 +36,7 @@ void AcceleratedStokesianDynamics::set_far_field(const Configuration& c) {
   const auto t0 = std::chrono::steady_clock::now();
   op_->set_configuration(c);
   stats_.seconds_far_field_setup = seconds_since(t0);
+  stats_.totals.far_field_setup += stats_.seconds_far_field_setup;
 }
 
 void AcceleratedStokesianDynamics::assemble_near_field(const Configuration& c) {
@@ -45,6 +46,7 @@ void AcceleratedStokesianDynamics::assemble_near_field(const Configuration& c) {
   near_.assemble(c.x, c.a, c.domain, Rnf_, &near_stats_);
   D_ = self_resistance(c.a, mu_, m_);
   stats_.seconds_near_field_assembly = seconds_since(t0);
+  stats_.totals.near_field_assembly += stats_.seconds_near_field_assembly;
   if (!factored_) {  // first configuration: the entries of mobile particles' forces (no fixed particles)
     const int d = dof_per_particle(m_), dv = m_ == Moments::FTS ? 6 : d;
     factored_v_.clear();
@@ -102,6 +104,7 @@ void AcceleratedStokesianDynamics::factorise(const std::vector<long>& v) {
   factored_ = true;
   stats_.factor_nonzeros = factor_.factor_nonzeros();
   stats_.seconds_factorisation = seconds_since(t0);
+  stats_.totals.factorisation += stats_.seconds_factorisation;
   factorise_held(v);
 }
 
@@ -196,6 +199,7 @@ void AcceleratedStokesianDynamics::factorise_held(const std::vector<long>& v) {
   stats_.held_clusters = int(held_lu_.size());
   stats_.held_wave_vectors = held_wave_ ? long(held_wave_->wave_vectors()) : 0;
   stats_.seconds_held_preconditioner = seconds_since(t0);
+  stats_.totals.held_preconditioner += stats_.seconds_held_preconditioner;
 }
 
 // z <- P^-1 z: each cluster's entries solved with its block, the other entries unchanged.
@@ -404,6 +408,10 @@ HydroResult AcceleratedStokesianDynamics::solve(const HydroProblem& p) {
   stats_.far_field_products = products;
   stats_.relative_residual = kr.relative_residual;
   stats_.seconds_krylov = seconds_since(t0);
+  ++stats_.totals.solves;
+  stats_.totals.iterations += iterations;
+  stats_.totals.products += products;
+  stats_.totals.krylov += stats_.seconds_krylov;
   res.iterations = iterations;
   res.regularised_pairs = near_stats_.regularised;
   if (p.warm) p.warm->iterate = Y;
@@ -458,9 +466,13 @@ VecX AcceleratedStokesianDynamics::brownian_force(double kT, double dt, const st
   stats_.lanczos_iterations = lr.iterations;
   stats_.deflated_wave_vectors = lr.wave_vectors;
   stats_.seconds_far_noise = seconds_since(t0);
+  ++stats_.totals.brownian_forces;
+  stats_.totals.lanczos_iterations += lr.iterations;
+  stats_.totals.far_noise += stats_.seconds_far_noise;
   t0 = std::chrono::steady_clock::now();
   xi += pref * near_.brownian_force(config_.x, config_.a, config_.domain, given, rng.fork());
   stats_.seconds_near_noise = seconds_since(t0);
+  stats_.totals.near_noise += stats_.seconds_near_noise;
   return xi;
 }
 

@@ -52,6 +52,8 @@ class Simulation final : public Dynamics {
   // only where the integrator reads it (the Fixman step with noise solves with F + xi itself), with
   // the overlap policy's check. Benchmarks time a step as this plus advance().
   Evaluation evaluate_step_start(const State& s);
+  // The hydrodynamic solver (benchmarks read its statistics).
+  HydroSolver& hydro_solver() { return hydro_.solver(); }
   Evaluation evaluate(const State& s, const std::vector<Vec3>& x, double t, const VecX* noise,
                       WarmStart* warm = nullptr) override;
   std::vector<Vec3> brownian_displacement(const State& s, double dt, Rng& rng) override;
