@@ -4,7 +4,11 @@ fig. 6): (a) wall time per Brownian SD step against N for the dense and the acce
 interior fractions 1, 0.1, 0.01 in simple shear (as [L24]), and for the dense solver also without
 the shear ("still", where the held block's factor is kept), with the exponent of a least-squares
 fit of log t against log N; (b) the speed-up from the constraint, t(fraction 1) / t(fraction f) at
-the same N. Prints the table of docs/channels.md.
+the same N; (c) where an accelerated-SD step's time goes (the solver's named phases, when the
+results have them): GMRES (products, triangular solves, preconditioner), far-field noise (Lanczos),
+near-field noise, set-up (far field, near field, factorisation, held blocks), at each N and
+fraction, with the GMRES iterations per step above each bar. Prints the table of
+docs/benchmarks.md.
 
 usage: plot_channel.py [RESULTS.json] [OUT.png]   (default bench/results/channel.json)
 """
@@ -28,7 +32,8 @@ def series(r):
 
 fracs = sorted({r["params"]["fraction"] for r in rows}, reverse=True)
 
-fig, ax = plt.subplots(1, 2, figsize=(12, 4.8))
+asd_phases = [r for r in rows if int(r["params"]["solver"]) == 1 and "krylov" in r["phases"]]
+fig, ax = plt.subplots(1, 3 if asd_phases else 2, figsize=(18 if asd_phases else 12, 4.8))
 table = {}
 for solver, shear, marker, ls in styles:
     s = (solver, shear)
@@ -69,6 +74,38 @@ ax[1].set_ylabel("t(N_I/N = 1) / t(N_I/N)")
 ax[1].set_title("(b) speed-up from the constraint")
 ax[1].legend(fontsize=8)
 ax[1].grid(alpha=0.3, which="both")
+if asd_phases:
+    parts = (("krylov", "GMRES solves"), ("far_noise", "far-field noise (Lanczos)"), ("near_noise", "near-field noise"),
+             ("setup", "set-up (far, near, factor, held blocks)"), ("other", "rest of the step"))
+    ns = sorted({int(r["params"]["N"]) for r in asd_phases})
+    width = 0.8 / len(fracs)
+    print("accelerated SD per step: N, fraction, seconds, GMRES its, krylov, far noise, near noise, set-up")
+    for k, f in enumerate(fracs):
+        for i, N in enumerate(ns):
+            r = next((r for r in asd_phases if int(r["params"]["N"]) == N and r["params"]["fraction"] == f), None)
+            if r is None:
+                continue
+            p = r["phases"]
+            setup = p["far_field_setup"] + p["near_field_assembly"] + p["factorisation"] + p["held_preconditioner"]
+            val = {"krylov": p["krylov"], "far_noise": p["far_noise"], "near_noise": p["near_noise"], "setup": setup}
+            val["other"] = max(0.0, p["seconds"] - sum(val.values()))
+            x = i + (k - (len(fracs) - 1) / 2) * width
+            bottom = 0.0
+            for j, (key, label) in enumerate(parts):
+                frac_t = val[key] / p["seconds"]
+                ax[2].bar(x, frac_t, width * 0.9, bottom=bottom, color=f"C{j + 3}",
+                          label=label if (k == 0 and i == 0) else None, edgecolor="k" if f == 1.0 else "none", lw=0.5)
+                bottom += frac_t
+            ax[2].text(x, 1.01, f"{p['gmres_iterations']:.0f}", ha="center", va="bottom", fontsize=7)
+            print(f"  {N:6d} {f:5g} {p['seconds']:.4f} {p['gmres_iterations']:5.1f} {p['krylov']:.4f} {p['far_noise']:.4f} "
+                  f"{p['near_noise']:.4f} {setup:.4f}")
+    ax[2].set_xticks(range(len(ns)))
+    ax[2].set_xticklabels([f"{N}\n" + " ".join(f"{f:g}" for f in fracs) for N in ns], fontsize=8)
+    ax[2].set_xlabel("N, and the bars' N_I/N (left to right)")
+    ax[2].set_ylabel("share of the step's wall time")
+    ax[2].set_ylim(0, 1.12)
+    ax[2].set_title("(c) accelerated SD: shares of a step (GMRES iterations on top)")
+    ax[2].legend(fontsize=7, loc="lower left")
 fig.tight_layout()
 fig.savefig(out, dpi=110)
 print("wrote", out)
