@@ -19,7 +19,7 @@
 // phases: seconds (per step); accelerated SD also its named phases per step from the solver's sums
 // (AcceleratedSdStats::totals): far_field_setup, near_field_assembly, factorisation,
 // held_preconditioner, krylov, far_noise, near_noise [s], and solves, gmres_iterations,
-// lanczos_iterations. The plot script fits exponents per solver, shear and fraction and
+// far_field_products, lanczos_iterations. The plot script fits exponents per solver, shear and fraction and
 // the speed-up from the constraint (time at fraction 1 over time at fraction f, same N).
 // Usage: bench_channel [--quick] [--out DIR]; full: N = 100 ... 10000 (dense to 500), 3 steps;
 // --quick: N = 60, 150, 1 step. BENCH_SOLVERS=dense (or accelerated) runs one solver only;
@@ -63,8 +63,15 @@ Scene make_scene(long n, double fraction, const std::string& solver, bool shear)
 int main(int argc, char** argv) {
   const bench::Options opt = bench::parse_options(argc, argv);
   bench::Results res(opt.quick ? "channel_quick" : "channel");
-  const char* nenv = std::getenv("BENCH_N");
-  const std::vector<long> sizes = nenv ? std::vector<long>{std::atol(nenv)} : opt.quick ? std::vector<long>{60, 150} : std::vector<long>{100, 300, 500, 1000, 3000, 10000};
+  std::vector<long> sizes = opt.quick ? std::vector<long>{60, 150} : std::vector<long>{100, 300, 500, 1000, 3000, 10000};
+  if (const char* e = std::getenv("BENCH_N")) {
+    const long n = std::atol(e);
+    if (n < 10 || n > 1000000) {
+      std::fprintf(stderr, "bench_channel: BENCH_N = \"%s\" must be a particle count from 10 to 1000000\n", e);
+      return 1;
+    }
+    sizes = {n};
+  }
   const int steps = opt.quick ? 1 : 3;
   const char* only = std::getenv("BENCH_SOLVERS");
   struct Series {
@@ -101,18 +108,17 @@ int main(int argc, char** argv) {
         std::fflush(stdout);
         std::map<std::string, double> ph{{"seconds", sec}};
         if (asd) {
-          const AcceleratedSdStats::Totals& a = asd->stats().totals;
-          const double k = double(steps);
-          ph["far_field_setup"] = (a.far_field_setup - before.far_field_setup) / k;
-          ph["near_field_assembly"] = (a.near_field_assembly - before.near_field_assembly) / k;
-          ph["factorisation"] = (a.factorisation - before.factorisation) / k;
-          ph["held_preconditioner"] = (a.held_preconditioner - before.held_preconditioner) / k;
-          ph["krylov"] = (a.krylov - before.krylov) / k;
-          ph["far_noise"] = (a.far_noise - before.far_noise) / k;
-          ph["near_noise"] = (a.near_noise - before.near_noise) / k;
-          ph["solves"] = double(a.solves - before.solves) / k;
-          ph["gmres_iterations"] = double(a.iterations - before.iterations) / k;
-          ph["lanczos_iterations"] = double(a.lanczos_iterations - before.lanczos_iterations) / k;
+          using T = AcceleratedSdStats::Totals;
+          const T& a = asd->stats().totals;
+          auto per_step = [&](auto T::*field) { return double(a.*field - before.*field) / double(steps); };
+          for (auto [name, field] : {std::pair{"far_field_setup", &T::far_field_setup},
+                                     {"near_field_assembly", &T::near_field_assembly},
+                                     {"factorisation", &T::factorisation}, {"held_preconditioner", &T::held_preconditioner},
+                                     {"krylov", &T::krylov}, {"far_noise", &T::far_noise}, {"near_noise", &T::near_noise}})
+            ph[name] = per_step(field);
+          for (auto [name, field] : {std::pair{"solves", &T::solves}, {"gmres_iterations", &T::iterations},
+                                     {"far_field_products", &T::products}, {"lanczos_iterations", &T::lanczos_iterations}})
+            ph[name] = per_step(field);
           std::printf("    per step: %.1f solves, %.1f GMRES iterations (%.4f s), Lanczos %.1f (%.4f s), near noise %.4f s, "
                       "set-up %.4f s, held preconditioner %.4f s\n",
                       ph["solves"], ph["gmres_iterations"], ph["krylov"], ph["lanczos_iterations"], ph["far_noise"],

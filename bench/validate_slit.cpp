@@ -30,9 +30,10 @@
 // Usage: [BENCH_SLIT_SEEDS=K] [BENCH_SLIT_PHI=phi] [BENCH_SLIT_SWEEPS=n] validate_slit [--quick]
 // [--out DIR]; --quick: the slit at h = 3 and 15, and phi = 0.1 with one configuration (a smoke
 // run). Full: K = 3 configurations per phi (seeds 1..K), about 10 min on 2 cores; K = 12 about
-// 45 min. BENCH_SLIT_PHI: that volume fraction's diffusivities only (no mobility part); BENCH_SLIT_SWEEPS: the placement's Monte Carlo
-// sweeps (0: random sequential addition alone); BENCH_SLIT_MIN_GAP: its hard-core margin [a]
-// (defaults: those of [particles]).
+// 45 min. BENCH_SLIT_PHI: that volume fraction's diffusivities only (no mobility part);
+// BENCH_SLIT_SWEEPS: the placement's Monte Carlo sweeps (0: random sequential addition alone);
+// BENCH_SLIT_MIN_GAP: its hard-core margin [a] (defaults: those of [particles]; a bad value is
+// refused by the scene parser, naming the key).
 #include "bench/harness.hpp"
 #include "engine/core/channel.hpp"
 #include "engine/hydrodynamics.hpp"

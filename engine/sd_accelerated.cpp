@@ -466,7 +466,6 @@ VecX AcceleratedStokesianDynamics::brownian_force(double kT, double dt, const st
   stats_.lanczos_iterations = lr.iterations;
   stats_.deflated_wave_vectors = lr.wave_vectors;
   stats_.seconds_far_noise = seconds_since(t0);
-  ++stats_.totals.brownian_forces;
   stats_.totals.lanczos_iterations += lr.iterations;
   stats_.totals.far_noise += stats_.seconds_far_noise;
   t0 = std::chrono::steady_clock::now();

@@ -99,7 +99,7 @@ struct AcceleratedSdStats {
   double seconds_far_noise = 0.0, seconds_near_noise = 0.0;  // last Brownian force's two parts
   // Sums over every call since construction (benchmarks take differences over the steps they time).
   struct Totals {
-    long solves = 0, iterations = 0, products = 0, brownian_forces = 0, lanczos_iterations = 0;
+    long solves = 0, iterations = 0, products = 0, lanczos_iterations = 0;
     double far_field_setup = 0, near_field_assembly = 0, factorisation = 0, held_preconditioner = 0;
     double krylov = 0, far_noise = 0, near_noise = 0;  // seconds
   } totals;

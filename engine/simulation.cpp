@@ -89,9 +89,12 @@ Evaluation Simulation::evaluate(const State& s, const std::vector<Vec3>& x, doub
   return evaluate_checked(s, x, t, diagnostics, nullptr);
 }
 
-Evaluation Simulation::evaluate_step_start(const State& s) {
-  GapSurvey overlaps;
-  return evaluate_checked(s, s.position, 0.0, false, &overlaps, nullptr, integrator_->reads_start_solve(model_.brownian));
+Evaluation Simulation::evaluate_step_start(const State& s, bool output_step, GapSurvey* overlaps) {
+  GapSurvey local;
+  // The deterministic solve at the state is needed for its frame, and by integrators that read it
+  // (fixman with noise solves with F + xi itself: one solve per step saved).
+  const bool solve = output_step || integrator_->reads_start_solve(model_.brownian);
+  return evaluate_checked(s, s.position, 0.0, output_step, overlaps ? overlaps : &local, nullptr, solve);
 }
 
 Evaluation Simulation::evaluate(const State& s, const std::vector<Vec3>& x, double t, const VecX* noise,
@@ -375,10 +378,7 @@ long Simulation::run(State& s, OutputSink& out, const RunControl& control) {
     GapSurvey overlaps;
     Evaluation ev;
     try {
-      // The deterministic solve at the state is needed for its frame, and by integrators that
-      // read it (fixman with noise solves with F + xi itself: one solve per step saved).
-      const bool solve = output_step || integrator_->reads_start_solve(model_.brownian);
-      ev = evaluate_checked(cur, cur.position, 0.0, output_step, &overlaps, nullptr, solve);
+      ev = evaluate_step_start(cur, output_step, &overlaps);
     } catch (const RunStopped&) {
       throw;
     } catch (const PhysicsError& e) {

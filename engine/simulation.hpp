@@ -48,10 +48,11 @@ class Simulation final : public Dynamics {
     return evaluate(s, x, t, false);
   }
   Evaluation evaluate(const State& s, const std::vector<Vec3>& x, double t, bool diagnostics);
-  // The evaluation run() makes at the start of a step that writes no frame: the deterministic solve
-  // only where the integrator reads it (the Fixman step with noise solves with F + xi itself), with
-  // the overlap policy's check. Benchmarks time a step as this plus advance().
-  Evaluation evaluate_step_start(const State& s);
+  // The evaluation run() makes at the start of every step: the deterministic solve only on frame
+  // steps (output_step, with the gap diagnostics) or where the integrator reads it (the Fixman step
+  // with noise solves with F + xi itself), and the overlaps for the overlap policy (into overlaps if
+  // given). Benchmarks time a step as this (output_step false) plus advance().
+  Evaluation evaluate_step_start(const State& s, bool output_step = false, GapSurvey* overlaps = nullptr);
   // The hydrodynamic solver (benchmarks read its statistics).
   HydroSolver& hydro_solver() { return hydro_.solver(); }
   Evaluation evaluate(const State& s, const std::vector<Vec3>& x, double t, const VecX* noise,

@@ -506,10 +506,14 @@ TEST_CASE("accelerated SD: a warm start meets the tolerance against dense SD and
       dense.prepare(l1.conf);
       const HydroResult ref = dense.solve(HydroProblem{l1.conf, c.fixed, l1.sample, l1.F, l1.T});
       s->prepare(l1.conf);
+      const AcceleratedSdStats::Totals before = s->stats().totals;
       const HydroResult cold = s->solve(HydroProblem{l1.conf, c.fixed, l1.sample, l1.F, l1.T});
       const int cold_products = s->stats().far_field_products;
       const HydroResult hot = s->solve(HydroProblem{l1.conf, c.fixed, l1.sample, l1.F, l1.T, nullptr, nullptr, &warm});
       const int warm_products = s->stats().far_field_products;
+      // The running sums (bench_channel's phases) add up the two solves.
+      CHECK(s->stats().totals.solves == before.solves + 2);
+      CHECK(s->stats().totals.products == before.products + cold_products + warm_products);
       MESSAGE(std::string(sp.name) << " tol " << tol << ": far-field products cold " << cold_products << ", warm " << warm_products
                       << "; errors " << compare(cold, ref, sp.m, c.fixed).worst() << " / "
                       << compare(hot, ref, sp.m, c.fixed).worst());
