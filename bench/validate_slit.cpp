@@ -33,7 +33,8 @@
 // 45 min. BENCH_SLIT_PHI: that volume fraction's diffusivities only (no mobility part);
 // BENCH_SLIT_SWEEPS: the placement's Monte Carlo sweeps (0: random sequential addition alone);
 // BENCH_SLIT_MIN_GAP: its hard-core margin [a] (defaults: those of [particles]; a bad value is
-// refused by the scene parser, naming the key).
+// refused by the scene parser, naming the key); BENCH_SLIT_WALL_RADIUS, BENCH_SLIT_LAYERS: the walls'
+// particle radius [a] and layers (defaults 1, 1; the box edge across the walls follows).
 #include "bench/harness.hpp"
 #include "engine/core/channel.hpp"
 #include "engine/hydrodynamics.hpp"
@@ -125,11 +126,21 @@ int main(int argc, char** argv) {
   // The placement's hard-core margin ([particles] min_gap [a], default there 1e-3).
   const char* gap_env = std::getenv("BENCH_SLIT_MIN_GAP");
   const double min_gap = gap_env ? std::atof(gap_env) : PlacementParams{}.min_gap;
+  // The wall layout ([walls] radius [a], layers; defaults 1 and 1, surface gap 0.05 a): the box edge
+  // across the walls holds H + 2 x thickness + gap, thickness 2 r_w + (layers - 1) s / sqrt 2.
+  const char* rw_env = std::getenv("BENCH_SLIT_WALL_RADIUS");
+  const char* layers_env = std::getenv("BENCH_SLIT_LAYERS");
+  const double r_w = rw_env ? std::atof(rw_env) : 1.0;
+  const long layers = layers_env ? std::atol(layers_env) : 1;
+  const double spacing = 2 * r_w + 0.05;
+  const double box_y = 6.0 + 2 * (2 * r_w + double(layers - 1) * spacing / std::sqrt(2.0)) + 0.05;
   for (double phi : phis)
     for (int seed = 1; seed <= seeds; ++seed) {
       std::ostringstream scene;
-      scene << "[domain]\nkind = \"periodic\"\nbox = [16.4, 10.05, 16.4]\n[walls]\nkind = \"slit\"\nheight = 6.0\n"
-            << "[particles]\ngenerate = \"random\"\nvolume_fraction = " << phi << "\nseed = " << seed;
+      scene.precision(17);
+      scene << "[domain]\nkind = \"periodic\"\nbox = [16.4, " << box_y << ", 16.4]\n[walls]\nkind = \"slit\"\nheight = 6.0\n";
+      if (rw_env || layers_env) scene << "radius = " << r_w << "\nlayers = " << layers << "\n";
+      scene << "[particles]\ngenerate = \"random\"\nvolume_fraction = " << phi << "\nseed = " << seed;
       if (sweeps >= 0) scene << "\nequilibration_sweeps = " << sweeps;
       if (gap_env) scene << "\nmin_gap = " << min_gap;
       scene << "\n[hydrodynamics]\nmodel = \"stokesian\"\nsolver = \"accelerated\"\nmoments = \"FTS\"\ntolerance = 1e-4\n";
@@ -148,7 +159,7 @@ int main(int argc, char** argv) {
           F[i][d] = 6 * kPi;
           D[d] = h.solve(conf, s.fixed, F, zero).U[i][d];
         }
-        res.add({{"kind", 1}, {"phi", phi}, {"seed", double(seed)}, {"eta", s.positions[i].y() - 0.5 * 10.05},
+        res.add({{"kind", 1}, {"phi", phi}, {"seed", double(seed)}, {"eta", s.positions[i].y() - 0.5 * box_y},
                  {"N", double(ni)}},
                 {{"Dpar", 0.5 * (D[0] + D[2])}, {"Dperp", D[1]}});
       }
@@ -156,7 +167,8 @@ int main(int argc, char** argv) {
       std::printf("diffusion phi %.2f seed %d: %zu interior spheres, %zu wall particles, %.1f s\n", phi, seed, ni,
                   s.wall_count, sec);
       res.add({{"kind", 2}, {"phi", phi}, {"seed", double(seed)}, {"N", double(ni)},
-               {"sweeps", double(sweeps >= 0 ? sweeps : PlacementParams{}.equilibration_sweeps)}, {"min_gap", min_gap}},
+               {"sweeps", double(sweeps >= 0 ? sweeps : PlacementParams{}.equilibration_sweeps)}, {"min_gap", min_gap},
+               {"wall_radius", r_w}, {"layers", double(layers)}, {"walls", double(s.wall_count)}},
               {{"seconds", sec}});
     }
   std::printf("wrote %s\n", res.write(opt.out).c_str());

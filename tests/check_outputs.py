@@ -119,8 +119,43 @@ def check_same(a, b, *datasets):
                 fail(f"{name} differs between {a} and {b}")
 
 
+def check_msd_tool(path):
+    """tools/stokesian_msd.py on a free-draining Brownian slit: D = D0 in every bin and direction,
+    the wall particles left out, standard errors as for independent Gaussian steps at lag 1."""
+    import json
+    import tempfile
+    import stokesian_msd
+    with h5py.File(path, "r") as f:
+        x = f["particles/all/position/value"][:]
+    moving = int((np.abs(x[-1] - x[0]).max(axis=1) > 0).sum())
+    with tempfile.TemporaryDirectory() as tmp:
+        out = os.path.join(tmp, "msd.json")
+        if stokesian_msd.main([path, "--fold", "--bins", "0,1,2", "--lags", "1,4", "--blocks", "8", "--json", out]) != 0:
+            fail("stokesian_msd.py refused a valid run")
+        res = json.load(open(out))
+        if res["meta"]["mobile"] != moving or moving == x.shape[1]:
+            fail(f"mobile particles {res['meta']['mobile']}, moving {moving} of {x.shape[1]} (walls must be left out)")
+        for r in res["rows"]:
+            for d, se in zip(r["D"], r["se"]):
+                # Free draining: every sample's mean is D0 exactly (Euler-Maruyama, constant mobility).
+                if not (abs(d - 1) <= 4.5 * se and abs(d - 1) < 0.15):
+                    fail(f"lag {r['lag_frames']} bin {r['bin']}: D/D0 = {d:.4f} (s.e. {se:.4f}), expected 1")
+        if stokesian_msd.main([path, "--lags", "1", "--blocks", "20", "--json", out]) != 0:
+            fail("stokesian_msd.py refused a valid run")
+        r = json.load(open(out))["rows"][0]
+        # Independent Gaussian steps: var(dx^2 / (2 D0 dt)) = 2 per sample.
+        ideal = math.sqrt(2.0 / r["samples"])
+        for se in r["se"]:
+            if not 0.5 * ideal < se < 2.0 * ideal:
+                fail(f"standard error {se:.5f} against {ideal:.5f} for independent samples")
+        print(f"D/D0 = {r['D']} (s.e. {r['se']}, independent-sample value {ideal:.4f}); {moving} mobile")
+    for bad in (["--bins", "1,0"], ["--blocks", "1"], ["--lags", "0"]):
+        if stokesian_msd.main([path] + bad) != 2:
+            fail(f"stokesian_msd.py accepted {bad}")
+
+
 CHECKS = {"mdanalysis": check_mdanalysis, "author": check_author, "msd": check_msd, "integers": check_integers,
-          "same": check_same}
+          "same": check_same, "msd_tool": check_msd_tool}
 
 if __name__ == "__main__":
     if len(sys.argv) < 3 or sys.argv[1] not in CHECKS:

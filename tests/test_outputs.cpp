@@ -138,6 +138,37 @@ TEST_CASE("periodic Brownian run: image counts give a continuous unwrapped traje
   CHECK(python_check("msd " + out + " " + std::to_string(1.0 / (6.0 * M_PI))) == 0);
 }
 
+TEST_CASE("tools/stokesian_msd.py: free-draining Brownian spheres in a slit diffuse with D0 in every bin, walls left out") {
+  TempDir tmp;
+  const std::string out = tmp / "slit.h5";
+  run_scene(R"([domain]
+kind = "periodic"
+box = [16.4, 10.05, 16.4]
+[fluid]
+kT = 1.0
+[walls]
+kind = "slit"
+height = 6.0
+[particles]
+generate = "random"
+volume_fraction = 0.1
+seed = 3
+[hydrodynamics]
+model = "free_draining"
+[brownian]
+seed = 5
+[time]
+dt = 0.05
+steps = 400
+integrator = "euler"
+[output]
+every = 1
+checkpoint_every = 400
+)",
+            out);
+  CHECK(python_check("msd_tool " + out) == 0);
+}
+
 TEST_CASE("image counts: kept in checkpoints, resumed runs write the uninterrupted run's images") {
   TempDir tmp;
   const std::string whole = tmp / "whole.h5", parts = tmp / "parts.h5";
