@@ -5,10 +5,12 @@ Brenner's flat-wall series; (b) the same in a slit of height 32 a against two fl
 point-force reflection plus each wall's finite-size terms, computed by the driver) and, dashed, the
 two walls' series superposed;
 (c) short-time self-diffusivity D_par/D0 and D_perp/D0 across a 6 a slit at each volume fraction,
-binned by the centre height (error bars: one standard error of the bin mean). Prints the tables of
-docs/channels.md.
+binned by the centre height (error bars: one standard error of the bin mean), and, where given, the
+same from the mean-square displacement of Brownian runs at the shortest lag (tools/stokesian_msd.py
+--json; its meta "phi" names the volume fraction). Prints the tables of docs/channels.md.
 
-usage: plot_slit.py [RESULTS.json] [OUT.png]   (default bench/results/slit.json)
+usage: plot_slit.py [RESULTS.json] [OUT.png] [MSD.json]
+       (defaults bench/results/slit.json and, with it, bench/results/slit_msd.json)
 """
 import json
 import sys
@@ -20,6 +22,7 @@ import numpy as np
 
 src = sys.argv[1] if len(sys.argv) > 1 else "bench/results/slit.json"
 out = sys.argv[2] if len(sys.argv) > 2 else src.replace(".json", ".png")
+msd_src = sys.argv[3] if len(sys.argv) > 3 else ("bench/results/slit_msd.json" if len(sys.argv) <= 1 else None)
 rows = json.load(open(src))["rows"]
 mob = [r for r in rows if r["params"]["kind"] == 0]
 dif = [r for r in rows if r["params"]["kind"] == 1]
@@ -88,10 +91,24 @@ for k, phi in enumerate(phis):
     c = f"C{k}"
     a.errorbar(cen, mp, yerr=sp, fmt="o-", color=c, label=f"D∥, φ = {phi:g}")
     a.errorbar(cen, mn, yerr=sn, fmt="s--", color=c, mfc="white", label=f"D⊥, φ = {phi:g}")
+if msd_src:
+    msd = json.load(open(msd_src))
+    phi = msd["meta"]["phi"]
+    lag = min(r["lag_frames"] for r in msd["rows"])
+    pts = [r for r in msd["rows"] if r["lag_frames"] == lag and "D" in r]
+    c = f"C{phis.index(phi)}" if phi in phis else "k"
+    cen = [0.5 * (r["bin"][0] + r["bin"][1]) + 0.04 for r in pts]
+    a.errorbar(cen, [0.5 * (r["D"][0] + r["D"][2]) for r in pts],
+               yerr=[0.5 * np.hypot(r["se"][0], r["se"][2]) for r in pts], fmt="^", color=c, ms=5,
+               label=f"D∥, φ = {phi:g}, Brownian MSD")
+    a.errorbar(cen, [r["D"][1] for r in pts], yerr=[r["se"][1] for r in pts], fmt="v", color=c, mfc="white", ms=5,
+               label=f"D⊥, φ = {phi:g}, Brownian MSD")
 a.set_xlabel("|y − c_y| / a (0: slit centre; 2: touching a wall)")
 a.set_ylabel("D / D0")
 a.set_title("(c) self-diffusivity across a 6 a slit (accelerated SD, FTS)")
-a.legend(fontsize=8, ncol=2)
+lo, hi = a.get_ylim()
+a.set_ylim(lo, hi + 0.3 * (hi - lo))  # room for the legend above the data
+a.legend(fontsize=7.5, ncol=3, loc="upper center")
 a.grid(alpha=0.3)
 fig.tight_layout()
 fig.savefig(out, dpi=110)
