@@ -50,6 +50,7 @@ def load(path, allow_flow):
         edges = g["box/edges/value"][:] if "box" in g else None
         img = g["image/value"][:] if "image" in g else None
         scene = tomllib.loads(f["parameters/stokesian/scene"][()].decode())
+        git = f["parameters/stokesian/git"][()].decode() if "parameters/stokesian/git" in f else "unknown"
         if "observables/particles_present" in f:
             raise Refused(f"{path}: an open channel (particles are inserted and removed), whose particles change")
     fluid = scene.get("fluid", {})
@@ -76,7 +77,7 @@ def load(path, allow_flow):
         raise Refused(f"{path}: frames are not evenly spaced in time (intervals {dt.min():g} to {dt.max():g})")
     d0 = kT / (6 * math.pi * mu * a)
     return {"path": path, "u": x[:, ~fixed], "d0": d0[~fixed], "dt": float(dt[0]), "centre": centre,
-            "mobile": int((~fixed).sum()), "frames": len(t)}
+            "mobile": int((~fixed).sum()), "frames": len(t), "git": git}
 
 
 def analyse(runs, axis, bins, fold, centre, lags, blocks):
@@ -185,7 +186,8 @@ def main(argv=None):
               f" {r['axis_minus_other']:+8.4f} ({r['se_axis_minus_other']:.4f})")
     if a.json:
         meta = {"trajectories": a.trajectory, "axis": ax, "fold": a.fold, "blocks": a.blocks,
-                "mobile": runs[0]["mobile"], "frame_interval": runs[0]["dt"]}
+                "mobile": runs[0]["mobile"], "frame_interval": runs[0]["dt"],
+                "git": " ".join(sorted({r["git"] for r in runs}))}  # the build(s) that wrote the runs
         with open(a.json, "w") as f:
             json.dump({"meta": meta, "rows": rows}, f, indent=1)
     return 0
