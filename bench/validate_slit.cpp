@@ -126,14 +126,18 @@ int main(int argc, char** argv) {
   // The placement's hard-core margin ([particles] min_gap [a], default there 1e-3).
   const char* gap_env = std::getenv("BENCH_SLIT_MIN_GAP");
   const double min_gap = gap_env ? std::atof(gap_env) : PlacementParams{}.min_gap;
-  // The wall layout ([walls] radius [a], layers; defaults 1 and 1, surface gap 0.05 a): the box edge
-  // across the walls holds H + 2 x thickness + gap, thickness 2 r_w + (layers - 1) s / sqrt 2.
+  // The wall layout ([walls] radius [a] and layers; the [walls] defaults otherwise): the box edge
+  // across the walls holds H + 2 x thickness + gap (trees/walls.hpp).
   const char* rw_env = std::getenv("BENCH_SLIT_WALL_RADIUS");
   const char* layers_env = std::getenv("BENCH_SLIT_LAYERS");
-  const double r_w = rw_env ? std::atof(rw_env) : 1.0;
-  const long layers = layers_env ? std::atol(layers_env) : 1;
-  const double spacing = 2 * r_w + 0.05;
-  const double box_y = 6.0 + 2 * (2 * r_w + double(layers - 1) * spacing / std::sqrt(2.0)) + 0.05;
+  ChannelParams layout;
+  layout.kind = ChannelParams::Kind::slit;
+  layout.height = 6.0;
+  if (rw_env) layout.radius = std::atof(rw_env);
+  if (layers_env) layout.layers = std::atol(layers_env);
+  const double r_w = layout.radius;
+  const long layers = layout.layers;
+  const double box_y = layout.height + 2 * wall_thickness(layout) + layout.gap;
   for (double phi : phis)
     for (int seed = 1; seed <= seeds; ++seed) {
       std::ostringstream scene;

@@ -152,6 +152,8 @@ def check_msd_tool(path):
     for bad in (["--bins", "1,0"], ["--blocks", "1"], ["--lags", "0"]):
         if stokesian_msd.main([path] + bad) != 2:
             fail(f"stokesian_msd.py accepted {bad}")
+    if stokesian_msd.main([os.path.abspath(__file__)]) != 2:  # not an HDF5 file
+        fail("stokesian_msd.py accepted a file that is not HDF5")
 
 
 CHECKS = {"mdanalysis": check_mdanalysis, "author": check_author, "msd": check_msd, "integers": check_integers,

@@ -40,7 +40,11 @@ class Refused(Exception):
 
 
 def load(path, allow_flow):
-    with h5py.File(path, "r") as f:
+    try:
+        f = h5py.File(path, "r")
+    except OSError as e:
+        raise Refused(f"{path}: cannot be read as HDF5 ({e})")
+    with f:
         if "particles/all/position" not in f:
             raise Refused(f"{path}: not a Stokesian trajectory (no particles/all/position)")
         g = f["particles/all"]
@@ -96,21 +100,18 @@ def analyse(runs, axis, bins, fold, centre, lags, blocks):
             nf = u.shape[0]
             if nf <= k:
                 raise Refused(f"{r['path']}: {nf} frames, too few for a lag of {k}")
-            s = np.zeros((nb, blocks, 4))
             dr = u[k:] - u[:-k]
             q = u[:-k, :, axis] - (r["centre"][axis] if centre is None else centre)
             if fold:
                 q = np.abs(q)
-            b = np.digitize(q, bins) - 1
-            blk = (np.arange(nf - k) * blocks) // (nf - k)
+            b = np.digitize(q, bins) - 1  # -1 or nb: outside every bin
+            blk = np.broadcast_to(((np.arange(nf - k) * blocks) // (nf - k))[:, None], b.shape)
             est = dr ** 2 / (2 * tau) / r["d0"][None, :, None]
-            for i in range(nb):
-                inb = b == i
-                for j in range(blocks):
-                    m = inb & (blk[:, None] == j)
-                    s[i, j, :3] = est[m].sum(axis=0)
-                    s[i, j, 3] = m.sum()
-            acc.append(s)
+            inside = (b >= 0) & (b < nb)
+            cell = (b * blocks + blk)[inside]  # one (bin, block) cell per sample
+            s = np.stack([np.bincount(cell, weights=est[..., d][inside], minlength=nb * blocks) for d in range(3)]
+                         + [np.bincount(cell, minlength=nb * blocks).astype(float)], axis=-1)
+            acc.append(s.reshape(nb, blocks, 4))
         acc = np.concatenate(acc, axis=1)  # (bins, blocks of every run, 4)
         for i in range(nb):
             c = acc[i, :, 3]
