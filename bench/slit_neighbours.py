@@ -12,6 +12,17 @@ spheres' squeeze (X^A), projected on a direction. Binned by the centre height as
 D_par and D_perp, next to the ratio D_perp/D_par read from its results. It is a diagnostic of the
 structure, not a mobility: the walls' far field is not in it.
 
+The column "shell" is the same ratio for neighbours spread uniformly over the contact shell (centres
+2 a apart) of a sphere at centre height eta, less the part the hard walls exclude: a neighbour's centre
+stays within 2 a of the slit's centre plane, so n_y <= u = min(1, (2 - eta)/2) on the wall side, and
+for n_y uniform on [-1, u], <n_y^2> = (u^3 + 1)/(3 (u + 1)) and r_perp/r_par = 2<n_y^2>/(1 - <n_y^2>)
+(1 in the bulk; 2/3 at eta = 1). It is geometry alone, without layering.
+
+The configurations are those the results file holds (its volume fractions and seeds, and the
+placement's sweeps and hard-core margin recorded in its kind 2 rows), so a run of validate_slit with
+BENCH_SLIT_SWEEPS=0 (random sequential addition) is read the same way. Only the default wall layout
+(one layer of radius 1, box 16.4 x 10.05 x 16.4) is handled; other layouts are refused.
+
 usage: slit_neighbours.py [--stokesian build/stokesian] [--results bench/results/slit.json] [--work DIR]
 """
 import argparse
@@ -35,19 +46,21 @@ height = 6.0
 generate = "random"
 volume_fraction = {phi}
 seed = {seed}
-[hydrodynamics]
+{extra}[hydrodynamics]
 model = "far_field"
 moments = "F"
 tolerance = 1e-2
 """
 
 
-def configuration(stokesian, work, phi, seed):
+def configuration(stokesian, work, phi, seed, placement):
     """Positions, radii and the interior mask of one validate_slit configuration."""
-    scene = os.path.join(work, f"slit_{phi}_{seed}.toml")
-    out = os.path.join(work, f"slit_{phi}_{seed}.h5")
+    tag = "_".join(f"{k}{v}" for k, v in sorted(placement.items()))
+    scene = os.path.join(work, f"slit_{phi}_{seed}_{tag}.toml")
+    out = os.path.join(work, f"slit_{phi}_{seed}_{tag}.h5")
+    extra = "".join(f"{k} = {v!r}\n" for k, v in sorted(placement.items()))
     with open(scene, "w") as f:
-        f.write(SCENE.format(phi=phi, seed=seed))
+        f.write(SCENE.format(phi=phi, seed=seed, extra=extra))
     run = subprocess.run([stokesian, "solve", scene, "--out", out, "--threads", "1"], capture_output=True, text=True)
     if run.returncode != 0:
         raise SystemExit(f"{stokesian} solve {scene} failed ({run.returncode}):\n{run.stderr}")
@@ -59,6 +72,13 @@ def configuration(stokesian, work, phi, seed):
     return x, np.broadcast_to(r, (len(x),)).astype(float), ~fixed
 
 
+def shell_ratio(eta):
+    """r_perp/r_par of a uniform contact shell cut by the walls' exclusion (see the module text)."""
+    u = min(1.0, (2.0 - eta) / 2.0)
+    ny2 = (u**3 + 1.0) / (3.0 * (u + 1.0))
+    return 2.0 * ny2 / (1.0 - ny2)
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--stokesian", default="build/stokesian")
@@ -67,13 +87,27 @@ def main():
     args = ap.parse_args()
     work = args.work or tempfile.mkdtemp(prefix="slit_neighbours_")
     os.makedirs(work, exist_ok=True)
-    rows = [r for r in json.load(open(args.results))["rows"] if r["params"]["kind"] == 1]
+    everything = json.load(open(args.results))["rows"]
+    rows = [r for r in everything if r["params"]["kind"] == 1]
+    runs = [r["params"] for r in everything if r["params"]["kind"] == 2]
+    if not rows:
+        raise SystemExit(f"{args.results}: no diffusion rows (kind 1); run validate_slit's diffusion part first")
+    for q in runs:
+        if q.get("wall_radius", 1.0) != 1.0 or q.get("layers", 1.0) != 1.0:
+            raise SystemExit(f"{args.results}: wall_radius {q.get('wall_radius')}, layers {q.get('layers')}: "
+                             "only the default wall layout (radius 1, one layer) is handled")
+    # The placement's knobs as validate_slit wrote them into its scenes (left at the defaults when absent).
+    placement = {}
+    if runs and "sweeps" in runs[0] and runs[0]["sweeps"] != 100:
+        placement["equilibration_sweeps"] = int(runs[0]["sweeps"])
+    if runs and "min_gap" in runs[0] and runs[0]["min_gap"] != 1e-3:
+        placement["min_gap"] = runs[0]["min_gap"]
     cy = 0.5 * BOX[1]
-    print("phi  |y - c_y|   spheres  neighbours  r_perp  r_par  r_perp/r_par   D_perp/D_par (validate_slit)")
-    for phi in (0.1, 0.25, 0.4):
-        acc = {b: np.zeros(4) for b in BINS}
+    print("phi  |y - c_y|   spheres  neighbours  r_perp  r_par  r_perp/r_par  counted  shell   D_perp/D_par (validate_slit)")
+    for phi in sorted({q["params"]["phi"] for q in rows}):
+        acc = {b: np.zeros(6) for b in BINS}
         for seed in sorted({int(q["params"]["seed"]) for q in rows if abs(q["params"]["phi"] - phi) < 1e-9}):
-            x, r, interior = configuration(args.stokesian, work, phi, seed)
+            x, r, interior = configuration(args.stokesian, work, phi, seed, placement)
             for i in np.where(interior)[0]:
                 d = x - x[i]
                 for k in (0, 2):  # periodic along the walls only
@@ -86,16 +120,18 @@ def main():
                 eta = abs(x[i, 1] - cy)
                 for b in BINS:
                     if b[0] <= eta < b[1]:
-                        acc[b] += [1, near.sum(), np.sum(w * n[:, 1] ** 2), np.sum(w * 0.5 * (n[:, 0] ** 2 + n[:, 2] ** 2))]
+                        acc[b] += [1, near.sum(), np.sum(w * n[:, 1] ** 2), np.sum(w * 0.5 * (n[:, 0] ** 2 + n[:, 2] ** 2)),
+                                   shell_ratio(eta), np.sum(n[:, 1] ** 2)]
         for b in BINS:
-            c, m, rp, rq = acc[b]
+            c, m, rp, rq, shell, ny2 = acc[b]
+            ny2 /= m  # unweighted <n_y^2> of the neighbours
             if not c:
                 continue
             sel = [q for q in rows if abs(q["params"]["phi"] - phi) < 1e-9 and b[0] <= abs(q["params"]["eta"]) < b[1]]
             ratio = (np.mean([q["phases"]["Dperp"] for q in sel]) / np.mean([q["phases"]["Dpar"] for q in sel])
                      if sel else float("nan"))
             print(f"{phi:4.2f}  {b[0]:.1f}-{min(b[1], 2.0):.1f}  {int(c):9d}  {m / c:10.2f}  {rp / c:6.1f}  {rq / c:5.1f}"
-                  f"  {rp / rq:12.2f}   {ratio:.3f}")
+                  f"  {rp / rq:12.2f}  {2 * ny2 / (1 - ny2):8.2f}  {shell / c:5.2f}   {ratio:.3f}")
 
 
 if __name__ == "__main__":

@@ -34,7 +34,10 @@
 // BENCH_SLIT_SWEEPS: the placement's Monte Carlo sweeps (0: random sequential addition alone);
 // BENCH_SLIT_MIN_GAP: its hard-core margin [a] (defaults: those of [particles]; a bad value is
 // refused by the scene parser, naming the key); BENCH_SLIT_WALL_RADIUS, BENCH_SLIT_LAYERS: the walls'
-// particle radius [a] and layers (defaults 1, 1; the box edge across the walls follows).
+// particle radius [a] and layers (defaults 1, 1; the box edge across the walls follows);
+// BENCH_SLIT_TOLERANCE: the diffusion solves' [hydrodynamics] tolerance (default 1e-4; refused by
+// the scene parser outside its range). The far field's own tolerance scales with (a_min/a_max)^3
+// (engine/accuracy.cpp), so smaller wall particles make each solve dearer at the same tolerance.
 #include "bench/harness.hpp"
 #include "engine/core/channel.hpp"
 #include "engine/hydrodynamics.hpp"
@@ -138,6 +141,8 @@ int main(int argc, char** argv) {
   const double r_w = layout.radius;
   const long layers = layout.layers;
   const double box_y = layout.height + 2 * wall_thickness(layout) + layout.gap;
+  const char* tol_env = std::getenv("BENCH_SLIT_TOLERANCE");
+  const double tolerance = tol_env ? std::atof(tol_env) : 1e-4;
   for (double phi : phis)
     for (int seed = 1; seed <= seeds; ++seed) {
       std::ostringstream scene;
@@ -147,7 +152,7 @@ int main(int argc, char** argv) {
       scene << "[particles]\ngenerate = \"random\"\nvolume_fraction = " << phi << "\nseed = " << seed;
       if (sweeps >= 0) scene << "\nequilibration_sweeps = " << sweeps;
       if (gap_env) scene << "\nmin_gap = " << min_gap;
-      scene << "\n[hydrodynamics]\nmodel = \"stokesian\"\nsolver = \"accelerated\"\nmoments = \"FTS\"\ntolerance = 1e-4\n";
+      scene << "\n[hydrodynamics]\nmodel = \"stokesian\"\nsolver = \"accelerated\"\nmoments = \"FTS\"\ntolerance = " << tolerance << "\n";
       const Scene s = io::parse_scene(scene.str(), "slit_diffusion.toml");
       const ResolvedModel m = resolve_model(s);
       Hydrodynamics h(m, 1.0, AmbientFlow{}, s.hydro.tolerance, lubrication::near_field_params(s.hydro, m.moments), 1.0);
@@ -172,7 +177,8 @@ int main(int argc, char** argv) {
                   s.wall_count, sec);
       res.add({{"kind", 2}, {"phi", phi}, {"seed", double(seed)}, {"N", double(ni)},
                {"sweeps", double(sweeps >= 0 ? sweeps : PlacementParams{}.equilibration_sweeps)}, {"min_gap", min_gap},
-               {"wall_radius", r_w}, {"layers", double(layers)}, {"walls", double(s.wall_count)}},
+               {"wall_radius", r_w}, {"layers", double(layers)}, {"walls", double(s.wall_count)},
+               {"tolerance", tolerance}},
               {{"seconds", sec}});
     }
   std::printf("wrote %s\n", res.write(opt.out).c_str());
