@@ -30,6 +30,8 @@ Cloud random_cloud(long n, double L, unsigned long seed) {
 }
 
 Options parse_options(int argc, char** argv) {
+  // Line-buffered stdout, so a long run redirected to a file shows each printed line as it comes.
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);
   Options o;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
