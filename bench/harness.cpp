@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
@@ -43,6 +44,19 @@ Options parse_options(int argc, char** argv) {
     }
   }
   return o;
+}
+
+double env_number(const char* name, double fallback, double lo, double hi, bool integer) {
+  const char* e = std::getenv(name);
+  if (!e) return fallback;
+  char* end = nullptr;
+  const double v = std::strtod(e, &end);
+  if (end == e || *end != '\0' || !(v >= lo && v <= hi) || (integer && v != std::floor(v))) {
+    std::fprintf(stderr, "error: %s = \"%s\": expected %s in [%g, %g]\n", name, e, integer ? "an integer" : "a number",
+                 lo, hi);
+    std::exit(2);
+  }
+  return v;
 }
 
 std::map<std::string, std::string> machine_metadata() {

@@ -19,6 +19,11 @@ struct Options {
 };
 Options parse_options(int argc, char** argv);
 
+// A numeric knob from the environment: `fallback` when `name` is unset; a value that is not a whole
+// number (or, with `integer`, not an integer) or lies outside [lo, hi] stops the driver with a
+// message naming the variable, its value and the range (exit 2).
+double env_number(const char* name, double fallback, double lo, double hi, bool integer = false);
+
 // Random cloud shared by the far-field drivers: n centres uniform in the cube [0, L)^3 (overlaps
 // allowed) and radii uniform in [0.5, 1.5] (<a^3> = 1.25), drawn from std::mt19937_64(seed).
 struct Cloud {

@@ -96,12 +96,16 @@ def main():
         if q.get("wall_radius", 1.0) != 1.0 or q.get("layers", 1.0) != 1.0:
             raise SystemExit(f"{args.results}: wall_radius {q.get('wall_radius')}, layers {q.get('layers')}: "
                              "only the default wall layout (radius 1, one layer) is handled")
-    # The placement's knobs as validate_slit wrote them into its scenes (left at the defaults when absent).
+    # The placement's knobs as validate_slit recorded them (older files without them: the defaults).
+    knobs = {(q.get("sweeps"), q.get("min_gap")) for q in runs}
+    if len(knobs) > 1:
+        raise SystemExit(f"{args.results}: runs with different placements {sorted(knobs, key=str)}; give one at a time")
+    sweeps, min_gap = knobs.pop() if knobs else (None, None)
     placement = {}
-    if runs and "sweeps" in runs[0] and runs[0]["sweeps"] != 100:
-        placement["equilibration_sweeps"] = int(runs[0]["sweeps"])
-    if runs and "min_gap" in runs[0] and runs[0]["min_gap"] != 1e-3:
-        placement["min_gap"] = runs[0]["min_gap"]
+    if sweeps is not None:
+        placement["equilibration_sweeps"] = int(sweeps)
+    if min_gap is not None:
+        placement["min_gap"] = min_gap
     cy = 0.5 * BOX[1]
     print("phi  |y - c_y|   spheres  neighbours  r_perp  r_par  r_perp/r_par  counted  shell   D_perp/D_par (validate_slit)")
     for phi in sorted({q["params"]["phi"] for q in rows}):
@@ -124,9 +128,9 @@ def main():
                                    shell_ratio(eta), np.sum(n[:, 1] ** 2)]
         for b in BINS:
             c, m, rp, rq, shell, ny2 = acc[b]
-            ny2 /= m  # unweighted <n_y^2> of the neighbours
-            if not c:
+            if not c or not m:
                 continue
+            ny2 /= m  # unweighted <n_y^2> of the neighbours
             sel = [q for q in rows if abs(q["params"]["phi"] - phi) < 1e-9 and b[0] <= abs(q["params"]["eta"]) < b[1]]
             ratio = (np.mean([q["phases"]["Dperp"] for q in sel]) / np.mean([q["phases"]["Dpar"] for q in sel])
                      if sel else float("nan"))

@@ -32,11 +32,12 @@
 // run). Full: K = 3 configurations per phi (seeds 1..K), about 10 min on 2 cores; K = 12 about
 // 45 min. BENCH_SLIT_PHI: that volume fraction's diffusivities only (no mobility part);
 // BENCH_SLIT_SWEEPS: the placement's Monte Carlo sweeps (0: random sequential addition alone);
-// BENCH_SLIT_MIN_GAP: its hard-core margin [a] (defaults: those of [particles]; a bad value is
-// refused by the scene parser, naming the key); BENCH_SLIT_WALL_RADIUS, BENCH_SLIT_LAYERS: the walls'
+// BENCH_SLIT_MIN_GAP: its hard-core margin [a] (defaults: those of [particles]; the scene parser
+// checks the combination, naming the key); BENCH_SLIT_WALL_RADIUS, BENCH_SLIT_LAYERS: the walls'
 // particle radius [a] and layers (defaults 1, 1; the box edge across the walls follows);
-// BENCH_SLIT_TOLERANCE: the diffusion solves' [hydrodynamics] tolerance (default 1e-4; refused by
-// the scene parser outside its range). The far field's own tolerance scales with (a_min/a_max)^3
+// BENCH_SLIT_TOLERANCE: the diffusion solves' [hydrodynamics] tolerance (default 1e-4, 1e-10..1e-2).
+// Each knob is checked when read (bench::env_number: a malformed or out-of-range value stops the driver,
+// naming it). The far field's own tolerance scales with (a_min/a_max)^3
 // (engine/accuracy.cpp), so smaller wall particles make each solve dearer at the same tolerance.
 #include "bench/harness.hpp"
 #include "engine/core/channel.hpp"
@@ -119,16 +120,14 @@ int main(int argc, char** argv) {
 
   // Self-diffusivity across a 6 a slit.
   std::vector<double> phis = opt.quick ? std::vector<double>{0.1} : std::vector<double>{0.1, 0.25, 0.4};
-  if (const char* e = std::getenv("BENCH_SLIT_PHI")) phis = {std::atof(e)};
+  if (std::getenv("BENCH_SLIT_PHI")) phis = {bench::env_number("BENCH_SLIT_PHI", 0, 1e-3, 0.6)};
   // Configurations per phi: 3, or BENCH_SLIT_SEEDS (1-100).
-  const char* seeds_env = std::getenv("BENCH_SLIT_SEEDS");
-  const int seeds = opt.quick ? 1 : (seeds_env ? std::clamp(std::atoi(seeds_env), 1, 100) : 3);
+  const int seeds = opt.quick ? 1 : int(bench::env_number("BENCH_SLIT_SEEDS", 3, 1, 100, true));
   // Monte Carlo sweeps of the placement ([particles] equilibration_sweeps; default 100 there).
-  const char* sweeps_env = std::getenv("BENCH_SLIT_SWEEPS");
-  const long sweeps = sweeps_env ? std::atol(sweeps_env) : -1;
+  const long sweeps = long(bench::env_number("BENCH_SLIT_SWEEPS", -1, 0, 1e6, true));  // -1: the default
   // The placement's hard-core margin ([particles] min_gap [a], default there 1e-3).
   const char* gap_env = std::getenv("BENCH_SLIT_MIN_GAP");
-  const double min_gap = gap_env ? std::atof(gap_env) : PlacementParams{}.min_gap;
+  const double min_gap = bench::env_number("BENCH_SLIT_MIN_GAP", PlacementParams{}.min_gap, 0, 1);
   // The wall layout ([walls] radius [a] and layers; the [walls] defaults otherwise): the box edge
   // across the walls holds H + 2 x thickness + gap (trees/walls.hpp).
   const char* rw_env = std::getenv("BENCH_SLIT_WALL_RADIUS");
@@ -136,13 +135,12 @@ int main(int argc, char** argv) {
   ChannelParams layout;
   layout.kind = ChannelParams::Kind::slit;
   layout.height = 6.0;
-  if (rw_env) layout.radius = std::atof(rw_env);
-  if (layers_env) layout.layers = std::atol(layers_env);
+  layout.radius = bench::env_number("BENCH_SLIT_WALL_RADIUS", layout.radius, 0.1, 2);
+  layout.layers = long(bench::env_number("BENCH_SLIT_LAYERS", double(layout.layers), 1, 4, true));
   const double r_w = layout.radius;
   const long layers = layout.layers;
   const double box_y = layout.height + 2 * wall_thickness(layout) + layout.gap;
-  const char* tol_env = std::getenv("BENCH_SLIT_TOLERANCE");
-  const double tolerance = tol_env ? std::atof(tol_env) : 1e-4;
+  const double tolerance = bench::env_number("BENCH_SLIT_TOLERANCE", 1e-4, 1e-10, 1e-2);
   for (double phi : phis)
     for (int seed = 1; seed <= seeds; ++seed) {
       std::ostringstream scene;
