@@ -249,9 +249,18 @@ ResourceEstimate estimate_resources(const Scene& s, const ResolvedModel& model) 
         const double buffer = std::min(p_nf, 16384.0) * 2.0 * d * d * 8.0 +
                               lubrication::SymmetricBlockMatrix::kChunks * n * 8.0;  // slices' product buffers
         const double factored = (N + 2 * p_nf) * d * d * 12.0 / 3.0;
-        e.components.push_back({"accelerated SD solve", gmres + buffer + factored,
+        // Held particles: the held-row preconditioner's coarse part, E (at most kHeldCoarseColumns
+        // squared) and A Z when kept (at most kHeldCoarseKept entries; engine/sd_accelerated.hpp).
+        double held = 0.0;
+        for (char f : s.fixed) held += f ? 1.0 : 0.0;
+        const double columns = std::min(double(AcceleratedStokesianDynamics::kHeldCoarseColumns), 12.0 * held / 16.0);
+        const double coarse = held > 0 ? columns * columns * 8.0 * 2.0 +
+                                             (n * columns <= AcceleratedStokesianDynamics::kHeldCoarseKept ? n * columns * 8.0 : 0.0)
+                                       : 0.0;
+        e.components.push_back({"accelerated SD solve", gmres + buffer + factored + coarse,
                                 "GMRES(" + std::to_string(AcceleratedStokesianDynamics::kRestart) +
-                                    ") basis, near-field assembly buffer, factorised velocity block",
+                                    ") basis, near-field assembly buffer, factorised velocity block" +
+                                    (held > 0 ? ", held preconditioner's coarse part" : ""),
                                 model_keys});
       }
     }

@@ -23,6 +23,38 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
+// Clusters of at most `cap` points by recursive bisection at the median along the longest extent:
+// ranges of `order` (a permutation of the points), in a fixed order.
+std::vector<std::pair<std::size_t, std::size_t>> bisect(const std::vector<Vec3>& x, std::size_t cap,
+                                                        std::vector<std::size_t>& order) {
+  order.resize(x.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::vector<std::pair<std::size_t, std::size_t>> clusters;
+  std::vector<std::pair<std::size_t, std::size_t>> todo{{0, order.size()}};
+  while (!todo.empty()) {
+    const auto [lo, hi] = todo.back();
+    todo.pop_back();
+    if (hi - lo <= cap) {
+      clusters.emplace_back(lo, hi);
+      continue;
+    }
+    Vec3 mn = x[order[lo]], mx = mn;
+    for (std::size_t k = lo; k < hi; ++k) {
+      mn = mn.cwiseMin(x[order[k]]);
+      mx = mx.cwiseMax(x[order[k]]);
+    }
+    int axis;
+    (mx - mn).maxCoeff(&axis);
+    const std::size_t mid = lo + (hi - lo) / 2;
+    std::nth_element(order.begin() + long(lo), order.begin() + long(mid), order.begin() + long(hi),
+                     [&](std::size_t p, std::size_t q) { return x[p][axis] < x[q][axis]; });
+    todo.emplace_back(lo, mid);
+    todo.emplace_back(mid, hi);
+  }
+  std::sort(clusters.begin(), clusters.end());  // a fixed order, independent of the work list
+  return clusters;
+}
+
 }  // namespace
 
 AcceleratedStokesianDynamics::AcceleratedStokesianDynamics(std::unique_ptr<MobilityOperator> far_field, double mu,
@@ -30,7 +62,7 @@ AcceleratedStokesianDynamics::AcceleratedStokesianDynamics(std::unique_ptr<Mobil
                                                            double shift, Method method, double factor_gap,
                                                            double brownian_tolerance)
     : m_(far_field->moments()), mu_(mu), op_(std::move(far_field)), near_(m_, mu, p), tol_(krylov_tolerance),
-      shift_(shift), factor_gap_(factor_gap), brownian_tol_(brownian_tolerance), method_(method) {}
+      shift_(shift), factor_gap_(factor_gap), brownian_tol_(brownian_tolerance), method_(method){}
 
 void AcceleratedStokesianDynamics::set_far_field(const Configuration& c) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -137,6 +169,13 @@ void AcceleratedStokesianDynamics::factorise_held(const std::vector<long>& v) {
   }
   held_entries_.clear();
   held_lu_.clear();
+  held_iterations_ = 0;
+  coarse_members_.clear();
+  coarse_offset_.clear();
+  coarse_dims_.clear();
+  coarse_size_ = 0;
+  coarse_built_ = false;
+  coarse_lu_ = {};
   held_ids_ = held;
   held_x_ = held_x;
   held_a_ = held_a;
@@ -145,31 +184,8 @@ void AcceleratedStokesianDynamics::factorise_held(const std::vector<long>& v) {
     // Centres of the held particles (an open domain: as they are).
     std::vector<Vec3> x(held.size());
     for (std::size_t k = 0; k < held.size(); ++k) x[k] = config_.x[std::size_t(held[k])];
-    std::vector<std::size_t> order(held.size());
-    std::iota(order.begin(), order.end(), 0);
-    std::vector<std::pair<std::size_t, std::size_t>> clusters;  // ranges of `order`
-    std::vector<std::pair<std::size_t, std::size_t>> todo{{0, order.size()}};
-    while (!todo.empty()) {
-      const auto [lo, hi] = todo.back();
-      todo.pop_back();
-      if (hi - lo <= std::size_t(kHeldCluster)) {
-        clusters.emplace_back(lo, hi);
-        continue;
-      }
-      Vec3 mn = x[order[lo]], mx = mn;
-      for (std::size_t k = lo; k < hi; ++k) {
-        mn = mn.cwiseMin(x[order[k]]);
-        mx = mx.cwiseMax(x[order[k]]);
-      }
-      int axis;
-      (mx - mn).maxCoeff(&axis);
-      const std::size_t mid = lo + (hi - lo) / 2;
-      std::nth_element(order.begin() + long(lo), order.begin() + long(mid), order.begin() + long(hi),
-                       [&](std::size_t p, std::size_t q) { return x[p][axis] < x[q][axis]; });
-      todo.emplace_back(lo, mid);
-      todo.emplace_back(mid, hi);
-    }
-    std::sort(clusters.begin(), clusters.end());  // a fixed order, independent of the work list
+    std::vector<std::size_t> order;
+    const auto clusters = bisect(x, std::size_t(kHeldCluster), order);
     ewald::EwaldReferenceOptions ewald_options;
     ewald_options.tail = kHeldEwaldTail;
     held_entries_.resize(clusters.size());
@@ -188,6 +204,37 @@ void AcceleratedStokesianDynamics::factorise_held(const std::vector<long>& v) {
                                          : assemble_mobility(xc, ac, mu_, m_);
       for (std::size_t r = 0; r < entries.size(); ++r) P.row(long(r)) *= D_[entries[r]];
       held_lu_[c].compute(P);
+    }
+    // Coarse clusters (more than one block): the same bisection with the cap doubled until the
+    // columns (3 + 3 per direction of extent, at most 12 per cluster) fit kHeldCoarseColumns.
+    if (held_coarse_ && clusters.size() > 1) {
+      std::size_t cap = std::size_t(kHeldCluster);
+      std::vector<std::size_t> corder;
+      auto coarse = bisect(x, cap, corder);
+      while (12 * long(coarse.size()) > kHeldCoarseColumns) coarse = bisect(x, cap *= 2, corder);
+      for (const auto& [lo, hi] : coarse) {
+        Vec3 centre = Vec3::Zero();
+        for (std::size_t k = lo; k < hi; ++k) centre += x[corder[k]];
+        centre /= double(hi - lo);
+        Mat3 cov = Mat3::Zero();
+        for (std::size_t k = lo; k < hi; ++k) cov += (x[corder[k]] - centre) * (x[corder[k]] - centre).transpose();
+        cov /= double(hi - lo);
+        // Linear directions: the principal axes with a spread (a sheet of wall particles has two),
+        // scaled to unit variance; each member keeps its coordinates along them.
+        Eigen::SelfAdjointEigenSolver<Mat3> es(cov);
+        const double top = es.eigenvalues().maxCoeff();
+        Mat3 dirs = Mat3::Zero();
+        long m = 0;
+        for (int q = 0; q < 3; ++q)
+          if (top > 0.0 && es.eigenvalues()[q] > 1e-4 * top)
+            dirs.col(m++) = es.eigenvectors().col(q) / std::sqrt(es.eigenvalues()[q]);
+        std::vector<std::pair<long, Vec3>> members;
+        for (std::size_t k = lo; k < hi; ++k) members.emplace_back(held[corder[k]], dirs.transpose() * (x[corder[k]] - centre));
+        coarse_offset_.push_back(coarse_size_);
+        coarse_dims_.push_back(m);
+        coarse_size_ += 3 + 3 * m;
+        coarse_members_.push_back(std::move(members));
+      }
     }
   }
   held_wave_.reset();
@@ -223,6 +270,78 @@ void AcceleratedStokesianDynamics::apply_held_inverse(VecX& z) const {
     for (std::size_t k = 0; k < e.size(); ++k) z[e[k]] = r[long(k)];
   }
   wave();
+}
+
+// Z^T v and z += Z w: per coarse cluster, the sum of the translational entries of v (3) and their
+// first moments along its scaled directions (3 per direction).
+void AcceleratedStokesianDynamics::coarse_restrict(const VecX& v, VecX& out) const {
+  const int d = dof_per_particle(m_);
+  out.setZero(coarse_size_);
+  for (std::size_t c = 0; c < coarse_members_.size(); ++c) {
+    const long col = coarse_offset_[c], m = coarse_dims_[c];
+    for (const auto& [i, r] : coarse_members_[c]) {
+      const Vec3 f = v.segment<3>(i * d);
+      out.segment<3>(col) += f;
+      for (long p = 0; p < m; ++p) out.segment<3>(col + 3 + 3 * p) += r[p] * f;
+    }
+  }
+}
+
+void AcceleratedStokesianDynamics::coarse_extend(const VecX& w, VecX& z) const {
+  const int d = dof_per_particle(m_);
+  for (std::size_t c = 0; c < coarse_members_.size(); ++c) {
+    const long col = coarse_offset_[c], m = coarse_dims_[c];
+    for (const auto& [i, r] : coarse_members_[c]) {
+      Vec3 f = w.segment<3>(col);
+      for (long p = 0; p < m; ++p) f += r[p] * w.segment<3>(col + 3 + 3 * p);
+      z.segment<3>(i * d) += f;
+    }
+  }
+}
+
+// Multiplicative (A Z kept): c = E^-1 Z^T y, z = Z c + P_GBG (y - A Z c), so that I - P A =
+// (I - P_GBG A)(I - Z E^-1 Z^T A). Additive (A Z too large to keep): z = P_GBG y + Z E^-1 Z^T y.
+void AcceleratedStokesianDynamics::apply_held_preconditioner(const VecX& y, VecX& z) const {
+  if (!coarse_built_) {
+    z = y;
+    apply_held_inverse(z);
+    return;
+  }
+  VecX zy;
+  coarse_restrict(y, zy);
+  const VecX c = coarse_lu_.solve(zy);
+  if (AZ_.size()) {
+    z.noalias() = y - AZ_ * c;
+  } else {
+    z = y;
+  }
+  apply_held_inverse(z);
+  coarse_extend(c, z);
+}
+
+// E = Z^T A Z column by column: on a held-only vector A is D M (Q and C^ read the mobile entries
+// only), so each column costs one far-field product.
+void AcceleratedStokesianDynamics::build_held_coarse(const LinearOperator& A, long n) {
+  const auto t0 = std::chrono::steady_clock::now();
+  MatX E(coarse_size_, coarse_size_);
+  const bool keep = double(n) * double(coarse_size_) <= kHeldCoarseKept;
+  AZ_.resize(keep ? n : 0, keep ? coarse_size_ : 0);
+  VecX unit = VecX::Zero(coarse_size_), W(n), AW, col;
+  for (long j = 0; j < coarse_size_; ++j) {
+    unit[j] = 1.0;
+    W.setZero();
+    coarse_extend(unit, W);
+    unit[j] = 0.0;
+    A(W, AW);
+    if (keep) AZ_.col(j) = AW;
+    coarse_restrict(AW, col);
+    E.col(j) = col;
+  }
+  coarse_lu_.compute(E);
+  coarse_built_ = true;
+  stats_.held_coarse_columns = coarse_size_;
+  stats_.seconds_held_coarse = seconds_since(t0);
+  stats_.totals.held_coarse += stats_.seconds_held_coarse;
 }
 
 HydroResult AcceleratedStokesianDynamics::solve(const HydroProblem& p) {
@@ -289,15 +408,24 @@ HydroResult AcceleratedStokesianDynamics::solve(const HydroProblem& p) {
   // Right preconditioning on the held rows: solve A P^-1 y = b, then W = P^-1 y.
   VecX Py;
   const LinearOperator AP = [&](const VecX& y, VecX& out) {
-    Py = y;
-    apply_held_inverse(Py);
+    apply_held_preconditioner(y, Py);
     A(Py, out);
   };
   const LinearOperator& Aused = held_lu_.empty() ? A : AP;
+  // The coarse part costs one product per column. In a box at zero strain (open domains, still
+  // periodic boxes: the blocks then last as long as the held particles) it is built at the first
+  // solve with the blocks, so the run is the same whether or not it was resumed. In a sheared box the
+  // blocks last a strain of kHeldStrainReuse; there it is built once the solves with these blocks
+  // have spent kHeldCoarseSaving of their iterations (about what it saves) as many products as it
+  // costs, so that whatever the blocks' lifetime it costs at most twice the better choice.
+  if (held_coarse_ && !coarse_built_ && coarse_size_ > 0 && !held_lu_.empty() &&
+      (coarse_at_once_ || held_domain_.shear_strain == 0.0 ||
+       kHeldCoarseSaving * double(held_iterations_) >= double(coarse_size_)))
+    build_held_coarse(A, n);
   // From the iterate y: V_v = R~^{-1}(g - W_v), X = W + C^ V, F = X + R_nf V.
   auto recover = [&](const VecX& iterate) {
-    VecX W = iterate;
-    apply_held_inverse(W);
+    VecX W;
+    apply_held_preconditioner(iterate, W);
     VecX rv(nv);
     for (long i = 0; i < nv; ++i) rv[i] = g[i] - W[v[std::size_t(i)]];
     const VecX Vv = nv > 0 ? factor_.solve(rv) : VecX();
@@ -404,6 +532,7 @@ HydroResult AcceleratedStokesianDynamics::solve(const HydroProblem& p) {
     }
   }
   stats_.held_error_estimate = estimate;
+  if (!held_lu_.empty()) held_iterations_ += iterations;
   stats_.iterations = iterations;
   stats_.far_field_products = products;
   stats_.relative_residual = kr.relative_residual;

@@ -57,6 +57,24 @@
 // (tested against set_held_long_wave(false)). Measured (FT, phi = 0.2, 90 % held, tolerance 1e-3,
 // solve at x0, all passes): 45 -> 30 iterations at N = 300, 67 -> 41 at 1000, 86 -> 57 at 3000; a
 // periodic slit's walls are unchanged (no mode stands out).
+// Coarse part (two-level): Z holds, per coarse cluster of held particles (the bisection with its
+// cap doubled from kHeldCluster until the columns fit kHeldCoarseColumns), the force fields uniform
+// (3) and linear in position along each principal direction of the cluster's extent (3 each; a
+// sheet of wall particles has two) on the translational entries; E = Z^T A Z, A the
+// unpreconditioned operator (on held entries D M: one far-field product per column). With
+// c = E^-1 Z^T y: P^-1 y = Z c + G B G (y - A Z c) when A Z has at most kHeldCoarseKept entries
+// (multiplicative: I - P^-1 A = (I - G B G A)(I - Z E^-1 Z^T A)), else Z c + G B G y (additive).
+// It targets the low tail G B G leaves (FT, phi = 0.2, 90 % held, N = 300: 76 of 1620 eigenvalues
+// of G B G D M_HH below 0.3, down to 0.10; collective translations over many clusters), which no
+// small set of vectors removes (its 30 slowest eigenvectors deflated exactly: 28 -> 21 iterations;
+// bench/study_held_coarse.cpp). Built at the first solve with the held blocks in a box at zero
+// strain (the blocks then last as long as the held particles, so resumed runs repeat the same
+// solves); in a sheared box (blocks kept for a strain of kHeldStrainReuse) once the solves with
+// these blocks have spent kHeldCoarseSaving of their iterations as many products as it costs.
+// Measured (docs/accelerated_sd.md, "Coarse part"): iterations per solve 18.1 -> 15.4
+// (configs/t_junction.toml), 33.3 -> 22.4 (configs/slit_poiseuille.toml), 55 -> 28 per step at
+// N = 1000, 90 % held (bench_channel). Tested against set_held_coarse(false) and dense SD
+// (tests/test_sd_accelerated.cpp).
 // Accuracy with held particles: the residual is relative to |b|, and the held rows can make |b|
 // far larger than some solved quantities (held particles in a flow, small holding forces on a
 // wall); the error then exceeded the tolerance up to 3x (N = 1000, phi = 0.2, half held). After the
@@ -93,6 +111,8 @@ struct AcceleratedSdStats {
   int lanczos_iterations = 0;   // far-field products of the last Brownian force
   long deflated_wave_vectors = 0;  // of its long-wave deflation (engine/brownian.hpp)
   int held_clusters = 0;        // blocks of the held-row preconditioner (0: none)
+  long held_coarse_columns = 0; // columns of its coarse part (0: none)
+  double seconds_held_coarse = 0.0;  // building the coarse part (its far-field products), when built
   long held_wave_vectors = 0;   // wave vectors of its long-wave part (0: none)
   double seconds_held_preconditioner = 0.0;  // assembling and factorising them
   double held_error_estimate = 0.0;  // last solve with held particles: its estimated relative error
@@ -100,7 +120,7 @@ struct AcceleratedSdStats {
   // Sums over every call since construction (benchmarks take differences over the steps they time).
   struct Totals {
     long solves = 0, iterations = 0, products = 0, lanczos_iterations = 0;
-    double far_field_setup = 0, near_field_assembly = 0, factorisation = 0, held_preconditioner = 0;
+    double far_field_setup = 0, near_field_assembly = 0, factorisation = 0, held_preconditioner = 0, held_coarse = 0;
     double krylov = 0, far_noise = 0, near_noise = 0;  // seconds
   } totals;
 };
@@ -144,6 +164,17 @@ class AcceleratedStokesianDynamics final : public HydroSolver {
     held_long_wave_ = on;
     held_lu_.clear();  // rebuilt at the next factorisation
   }
+  // Its coarse part (on by default; off: blocks and long waves alone, the twin).
+  // at_once: built at the first solve with the held blocks instead of when it has paid (tests).
+  void set_held_coarse(bool on, bool at_once = false) {
+    held_coarse_ = on;
+    coarse_at_once_ = at_once;
+    held_lu_.clear();  // rebuilt at the next factorisation
+  }
+  static constexpr long kHeldCoarseColumns = 1200;
+  static constexpr double kHeldCoarseSaving = 1.0 / 3.0;
+  // A Z is kept (multiplicative form) when it has at most this many entries (32 MB).
+  static constexpr double kHeldCoarseKept = 4e6;
   static constexpr long kHeldWaveVectors = 64;
   static constexpr int kHeldCluster = 32;
   // Periodic boxes: the blocks are Ewald sums truncated at this tail (terms below exp(-tail^2)), and
@@ -196,6 +227,22 @@ class AcceleratedStokesianDynamics final : public HydroSolver {
   std::vector<std::vector<long>> held_entries_;
   std::unique_ptr<LongWaveDeflation> held_wave_;  // long-wave part of the held rows' inverse (periodic)
   std::vector<Eigen::PartialPivLU<MatX>> held_lu_;
+  // Coarse part: per coarse cluster its held particles and their centroid; E's LU; built lazily.
+  void build_held_coarse(const LinearOperator& A, long n);
+  void coarse_restrict(const VecX& v, VecX& out) const;  // out = Z^T v
+  void coarse_extend(const VecX& w, VecX& z) const;      // z += Z w
+  void apply_held_preconditioner(const VecX& y, VecX& z) const;  // z = P^-1 y
+  bool held_coarse_ = true;
+  bool coarse_at_once_ = false;
+  long held_iterations_ = 0;  // GMRES iterations of the solves since the held blocks were built
+  // Per coarse cluster: (particle, its coordinates along the cluster's scaled directions), the
+  // number of directions and the cluster's first column.
+  std::vector<std::vector<std::pair<long, Vec3>>> coarse_members_;
+  std::vector<long> coarse_dims_, coarse_offset_;
+  long coarse_size_ = 0;      // columns of Z
+  bool coarse_built_ = false;  // E factorised
+  Eigen::PartialPivLU<MatX> coarse_lu_;
+  MatX AZ_;  // A Z (multiplicative form), empty when too large (additive form)
 };
 
 }  // namespace stokesian
