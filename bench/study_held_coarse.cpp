@@ -14,7 +14,8 @@
 // Rows: kind 0: smoother (1 blocks, 2 G B G), coarse (0 none, 1 uniform, 2 uniform + linear),
 // cluster, form (0 additive, 1 multiplicative); iterations, columns. kind 1: k; iterations.
 // kind 2: eigenvalue statistics. Usage: study_held_coarse [--quick] [--out DIR]; N = 300 (quick:
-// 150); STUDY_N=n (up to 1000: a dense 6 N_H matrix and its eigenvectors, ~2 min at 1000).
+// 150); STUDY_N=n (up to 1000: a dense 6 N_H matrix and its eigenvectors, ~3 min at 1000); writes
+// held_coarse_<N>.json.
 #include "bench/harness.hpp"
 #include "engine/brownian.hpp"
 #include "engine/core/krylov.hpp"
@@ -70,8 +71,8 @@ Clusters bisect(const std::vector<Vec3>& x, std::size_t cap) {
 
 int main(int argc, char** argv) {
   const bench::Options opt = bench::parse_options(argc, argv);
-  bench::Results res(opt.quick ? "held_coarse_quick" : "held_coarse");
   const long n = long(bench::env_number("STUDY_N", opt.quick ? 150 : 300, 50, 1000, true));
+  bench::Results res(opt.quick ? "held_coarse_quick" : "held_coarse_" + std::to_string(n));
   const double L = std::cbrt(double(n) * 4.0 / 3.0 * kPi / 0.2);
   std::ostringstream o;
   o.precision(10);
