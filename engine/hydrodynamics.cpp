@@ -20,6 +20,7 @@ Hydrodynamics::Hydrodynamics(const ResolvedModel& model, double viscosity, std::
     const FarFieldMethodEntry* ff = far_field_methods().find(model_.far_field);
     if (!ff) throw std::invalid_argument("Hydrodynamics: no far-field method \"" + model_.far_field + "\"");
     setup.far_field = ff->make(setup.spec);
+    setup.make_far_field = [ff, spec = setup.spec] { return ff->make(spec); };
   }
   solver_ = solver->make(std::move(setup));
 }

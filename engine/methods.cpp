@@ -43,9 +43,11 @@ Registry<SolverEntry> make_solvers() {
          }});
   r.add({"accelerated_sd", "far field + lubrication, matrix-free GMRES preconditioned by the CHOLMOD factor of the near field",
          HydroModel::stokesian, true, false, true, 0, 0, [](SolverSetup s) {
-           return std::make_unique<AcceleratedStokesianDynamics>(
+           auto solver = std::make_unique<AcceleratedStokesianDynamics>(
                std::move(s.far_field), s.spec.viscosity, s.near_field, s.knobs.krylov, AcceleratedStokesianDynamics::kShift,
                AcceleratedStokesianDynamics::Method::gmres, AcceleratedStokesianDynamics::kFactorGap, s.knobs.brownian);
+           solver->set_far_field_factory(std::move(s.make_far_field));
+           return solver;
          }});
   return r;
 }

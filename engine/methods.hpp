@@ -33,6 +33,7 @@ struct FarFieldMethodEntry {
 struct SolverSetup {
   MobilitySpec spec;                      // moments, viscosity, tolerance
   std::unique_ptr<MobilityOperator> far_field;  // made from the chosen far-field entry (nullptr for free draining)
+  std::function<std::unique_ptr<MobilityOperator>()> make_far_field;  // another of the same (empty without)
   lubrication::NearFieldParams near_field;
   AccuracyKnobs knobs;                    // inner tolerances from the scene's (engine/accuracy.hpp)
 };

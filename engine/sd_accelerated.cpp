@@ -62,7 +62,7 @@ AcceleratedStokesianDynamics::AcceleratedStokesianDynamics(std::unique_ptr<Mobil
                                                            double shift, Method method, double factor_gap,
                                                            double brownian_tolerance)
     : m_(far_field->moments()), mu_(mu), op_(std::move(far_field)), near_(m_, mu, p), tol_(krylov_tolerance),
-      shift_(shift), factor_gap_(factor_gap), brownian_tol_(brownian_tolerance), method_(method){}
+      shift_(shift), factor_gap_(factor_gap), brownian_tol_(brownian_tolerance), method_(method) {}
 
 void AcceleratedStokesianDynamics::set_far_field(const Configuration& c) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -299,8 +299,10 @@ void AcceleratedStokesianDynamics::coarse_extend(const VecX& w, VecX& z) const {
   }
 }
 
-// Multiplicative (A Z kept): c = E^-1 Z^T y, z = Z c + P_GBG (y - A Z c), so that I - P A =
-// (I - P_GBG A)(I - Z E^-1 Z^T A). Additive (A Z too large to keep): z = P_GBG y + Z E^-1 Z^T y.
+// Multiplicative (the held rows of A Z kept): c = E^-1 Z^T y, z = Z c + P_GBG (y - Pi_H A Z c),
+// Pi_H the held entries (with all of A Z, I - P A = (I - P_GBG A)(I - Z E^-1 Z^T A); the held rows
+// alone depend on the held particles only, so P does not depend on where the mobile ones were when
+// it was built). Additive (A Z too large to keep): z = P_GBG y + Z E^-1 Z^T y.
 void AcceleratedStokesianDynamics::apply_held_preconditioner(const VecX& y, VecX& z) const {
   if (!coarse_built_) {
     z = y;
@@ -310,10 +312,11 @@ void AcceleratedStokesianDynamics::apply_held_preconditioner(const VecX& y, VecX
   VecX zy;
   coarse_restrict(y, zy);
   const VecX c = coarse_lu_.solve(zy);
+  z = y;
   if (AZ_.size()) {
-    z.noalias() = y - AZ_ * c;
-  } else {
-    z = y;
+    const int d = dof_per_particle(m_);
+    const VecX azc = AZ_ * c;
+    for (std::size_t k = 0; k < held_ids_.size(); ++k) z.segment(held_ids_[k] * d, d) -= azc.segment(long(k) * d, d);
   }
   apply_held_inverse(z);
   coarse_extend(c, z);
@@ -324,16 +327,33 @@ void AcceleratedStokesianDynamics::apply_held_preconditioner(const VecX& y, VecX
 void AcceleratedStokesianDynamics::build_held_coarse(const LinearOperator& A, long n) {
   const auto t0 = std::chrono::steady_clock::now();
   MatX E(coarse_size_, coarse_size_);
-  const bool keep = double(n) * double(coarse_size_) <= kHeldCoarseKept;
-  AZ_.resize(keep ? n : 0, keep ? coarse_size_ : 0);
-  VecX unit = VecX::Zero(coarse_size_), W(n), AW, col;
+  const int d = dof_per_particle(m_);
+  const long nh = long(held_ids_.size()) * d;
+  const bool keep = double(nh) * double(coarse_size_) <= kHeldCoarseKept;
+  AZ_.resize(keep ? nh : 0, keep ? coarse_size_ : 0);
+  // With a factory: D M on the held particles alone (their own operator), scattered back.
+  std::unique_ptr<MobilityOperator> held_op;
+  if (make_far_field_) {
+    held_op = make_far_field_();
+    held_op->set_configuration(Configuration{held_x_, held_a_, config_.domain});
+  }
+  VecX unit = VecX::Zero(coarse_size_), W(n), AW, col, Wh(nh), Mh;
   for (long j = 0; j < coarse_size_; ++j) {
     unit[j] = 1.0;
     W.setZero();
     coarse_extend(unit, W);
     unit[j] = 0.0;
-    A(W, AW);
-    if (keep) AZ_.col(j) = AW;
+    if (held_op) {
+      for (std::size_t k = 0; k < held_ids_.size(); ++k) Wh.segment(long(k) * d, d) = W.segment(held_ids_[k] * d, d);
+      held_op->apply(Wh, Mh);
+      AW.setZero(n);
+      for (std::size_t k = 0; k < held_ids_.size(); ++k)
+        AW.segment(held_ids_[k] * d, d) = Mh.segment(long(k) * d, d).cwiseProduct(D_.segment(held_ids_[k] * d, d));
+    } else {
+      A(W, AW);
+    }
+    if (keep)
+      for (std::size_t k = 0; k < held_ids_.size(); ++k) AZ_.col(j).segment(long(k) * d, d) = AW.segment(held_ids_[k] * d, d);
     coarse_restrict(AW, col);
     E.col(j) = col;
   }

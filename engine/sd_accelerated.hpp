@@ -62,8 +62,9 @@
 // (3) and linear in position along each principal direction of the cluster's extent (3 each; a
 // sheet of wall particles has two) on the translational entries; E = Z^T A Z, A the
 // unpreconditioned operator (on held entries D M: one far-field product per column). With
-// c = E^-1 Z^T y: P^-1 y = Z c + G B G (y - A Z c) when A Z has at most kHeldCoarseKept entries
-// (multiplicative: I - P^-1 A = (I - G B G A)(I - Z E^-1 Z^T A)), else Z c + G B G y (additive).
+// c = E^-1 Z^T y: P^-1 y = Z c + G B G (y - Pi_H A Z c) (Pi_H: the held entries, so P depends on the
+// held particles alone) when those rows have at most kHeldCoarseKept entries (multiplicative), else
+// Z c + G B G y (additive).
 // It targets the low tail G B G leaves (FT, phi = 0.2, 90 % held, N = 300: 76 of 1620 eigenvalues
 // of G B G D M_HH below 0.3, down to 0.10; collective translations over many clusters), which no
 // small set of vectors removes (its 30 slowest eigenvectors deflated exactly: 28 -> 21 iterations;
@@ -71,10 +72,12 @@
 // strain (the blocks then last as long as the held particles, so resumed runs repeat the same
 // solves); in a sheared box (blocks kept for a strain of kHeldStrainReuse) once the solves with
 // these blocks have spent kHeldCoarseSaving of their iterations as many products as it costs.
-// Measured (docs/accelerated_sd.md, "Coarse part"): iterations per solve 18.1 -> 15.4
-// (configs/t_junction.toml), 33.3 -> 22.4 (configs/slit_poiseuille.toml), 55 -> 28 per step at
-// N = 1000, 90 % held (bench_channel). Tested against set_held_coarse(false) and dense SD
-// (tests/test_sd_accelerated.cpp).
+// E and the kept rows come from an operator set to the held particles alone
+// (set_far_field_factory), so P depends on them alone. Measured (docs/accelerated_sd.md, "Coarse
+// part"): iterations per solve 21.4 -> 20.3 (configs/t_junction.toml), 45.5 -> 26.0
+// (configs/slit_poiseuille.toml), about half per step at N = 1000-3000, 90 % held (bench_channel).
+// Tested against set_held_coarse(false), dense SD and for its dependence on the held particles
+// alone (tests/test_sd_accelerated.cpp).
 // Accuracy with held particles: the residual is relative to |b|, and the held rows can make |b|
 // far larger than some solved quantities (held particles in a flow, small holding forces on a
 // wall); the error then exceeded the tolerance up to 3x (N = 1000, phi = 0.2, half held). After the
@@ -164,6 +167,10 @@ class AcceleratedStokesianDynamics final : public HydroSolver {
     held_long_wave_ = on;
     held_lu_.clear();  // rebuilt at the next factorisation
   }
+  // Makes a far-field operator like the solver's: the coarse part's products then use one set to the
+  // held particles alone, so that it depends on them alone (bitwise; without it the solver's own
+  // operator, whose sums also visit the mobile particles, leaves round-off of where they were).
+  void set_far_field_factory(std::function<std::unique_ptr<MobilityOperator>()> f) { make_far_field_ = std::move(f); }
   // Its coarse part (on by default; off: blocks and long waves alone, the twin).
   // at_once: built at the first solve with the held blocks instead of when it has paid (tests).
   void set_held_coarse(bool on, bool at_once = false) {
@@ -173,7 +180,7 @@ class AcceleratedStokesianDynamics final : public HydroSolver {
   }
   static constexpr long kHeldCoarseColumns = 1200;
   static constexpr double kHeldCoarseSaving = 1.0 / 3.0;
-  // A Z is kept (multiplicative form) when it has at most this many entries (32 MB).
+  // The held rows of A Z are kept (multiplicative form) when they have at most this many entries (32 MB).
   static constexpr double kHeldCoarseKept = 4e6;
   static constexpr long kHeldWaveVectors = 64;
   static constexpr int kHeldCluster = 32;
@@ -234,6 +241,7 @@ class AcceleratedStokesianDynamics final : public HydroSolver {
   void apply_held_preconditioner(const VecX& y, VecX& z) const;  // z = P^-1 y
   bool held_coarse_ = true;
   bool coarse_at_once_ = false;
+  std::function<std::unique_ptr<MobilityOperator>()> make_far_field_;
   long held_iterations_ = 0;  // GMRES iterations of the solves since the held blocks were built
   // Per coarse cluster: (particle, its coordinates along the cluster's scaled directions), the
   // number of directions and the cluster's first column.
@@ -242,7 +250,7 @@ class AcceleratedStokesianDynamics final : public HydroSolver {
   long coarse_size_ = 0;      // columns of Z
   bool coarse_built_ = false;  // E factorised
   Eigen::PartialPivLU<MatX> coarse_lu_;
-  MatX AZ_;  // A Z (multiplicative form), empty when too large (additive form)
+  MatX AZ_;  // held rows of A Z (multiplicative form; held_ids_ order), empty when too large (additive)
 };
 
 }  // namespace stokesian
