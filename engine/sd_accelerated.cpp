@@ -323,7 +323,8 @@ void AcceleratedStokesianDynamics::apply_held_preconditioner(const VecX& y, VecX
 }
 
 // E = Z^T A Z column by column: on a held-only vector A is D M (Q and C^ read the mobile entries
-// only), so each column costs one far-field product.
+// only), so each column costs one far-field product, made by an operator set to the held particles
+// alone when the solver has a factory (then E and the kept rows depend on them alone), else by A.
 void AcceleratedStokesianDynamics::build_held_coarse(const LinearOperator& A, long n) {
   const auto t0 = std::chrono::steady_clock::now();
   MatX E(coarse_size_, coarse_size_);
