@@ -4,7 +4,7 @@
 // first 90 % held, FT), M = the Ewald-summed grand mobility of the held spheres
 // (ewald::ewald_mobility), and GMRES on M P y = b (b standard normal, relative residual 2e-6, the
 // depth the solver's error-estimated passes reach at tolerance 1e-3) with
-//   - P = B: the block-Jacobi inverse over clusters of at most 32 (recursive bisection, as the solver);
+//   - P = B: the block-Jacobi inverse over clusters of at most 32 (the solver's bisect_clusters);
 //   - P = G B G: with the long-wave deflation G of the held spheres (engine/brownian.hpp);
 //   - two-level: coarse space Z of force fields uniform, or uniform and linear in position, over
 //     coarse clusters of at most 32 / 64 / 128 spheres, E = Z^T M Z, added to G B G additively
@@ -19,55 +19,21 @@
 #include "bench/harness.hpp"
 #include "engine/brownian.hpp"
 #include "engine/core/krylov.hpp"
+#include "engine/sd_accelerated.hpp"
 #include "engine/simulation.hpp"
 #include "ewald/ewald_reference.hpp"
 #include "io/scene_toml.hpp"
 
 #include <Eigen/Dense>
 
-#include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <numeric>
 #include <random>
 #include <sstream>
 
 using namespace stokesian;
 
-namespace {
-
-using Clusters = std::vector<std::vector<long>>;
-
-// Recursive bisection at the median of the longest extent, clusters of at most cap.
-Clusters bisect(const std::vector<Vec3>& x, std::size_t cap) {
-  std::vector<long> order(x.size());
-  std::iota(order.begin(), order.end(), 0);
-  Clusters out;
-  std::vector<std::pair<std::size_t, std::size_t>> todo{{0, order.size()}};
-  while (!todo.empty()) {
-    const auto [lo, hi] = todo.back();
-    todo.pop_back();
-    if (hi - lo <= cap) {
-      out.emplace_back(order.begin() + long(lo), order.begin() + long(hi));
-      continue;
-    }
-    Vec3 mn = x[std::size_t(order[lo])], mx = mn;
-    for (std::size_t k = lo; k < hi; ++k) {
-      mn = mn.cwiseMin(x[std::size_t(order[k])]);
-      mx = mx.cwiseMax(x[std::size_t(order[k])]);
-    }
-    int axis;
-    (mx - mn).maxCoeff(&axis);
-    const std::size_t mid = lo + (hi - lo) / 2;
-    std::nth_element(order.begin() + long(lo), order.begin() + long(mid), order.begin() + long(hi),
-                     [&](long p, long q) { return x[std::size_t(p)][axis] < x[std::size_t(q)][axis]; });
-    todo.emplace_back(lo, mid);
-    todo.emplace_back(mid, hi);
-  }
-  return out;
-}
-
-}  // namespace
+using Clusters = std::vector<std::vector<std::size_t>>;
 
 int main(int argc, char** argv) {
   const bench::Options opt = bench::parse_options(argc, argv);
@@ -89,7 +55,7 @@ int main(int argc, char** argv) {
   MatX M = ewald::ewald_mobility(x, a, 1.0, Moments::FT, st.domain);
   M = (0.5 * (M + M.transpose())).eval();
 
-  const Clusters blocks = bisect(x, 32);
+  const Clusters blocks = bisect_clusters(x, 32);  // as the solver (engine/sd_accelerated.hpp)
   std::vector<std::vector<long>> entries;
   std::vector<Eigen::LLT<MatX>> factors;
   for (const auto& c : blocks) {
@@ -132,7 +98,7 @@ int main(int argc, char** argv) {
 
   // Coarse spaces: per coarse cluster, uniform (3 columns) or uniform and linear (12).
   auto coarse_space = [&](std::size_t cap, bool linear) {
-    const Clusters cl = bisect(x, cap);
+    const Clusters cl = bisect_clusters(x, cap);
     MatX Z = MatX::Zero(D, long(cl.size()) * (linear ? 12 : 3));
     long col = 0;
     for (const auto& c : cl) {

@@ -23,19 +23,18 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// Clusters of at most `cap` points by recursive bisection at the median along the longest extent:
-// ranges of `order` (a permutation of the points), in a fixed order.
-std::vector<std::pair<std::size_t, std::size_t>> bisect(const std::vector<Vec3>& x, std::size_t cap,
-                                                        std::vector<std::size_t>& order) {
-  order.resize(x.size());
+}  // namespace
+
+std::vector<std::vector<std::size_t>> bisect_clusters(const std::vector<Vec3>& x, std::size_t cap) {
+  std::vector<std::size_t> order(x.size());
   std::iota(order.begin(), order.end(), 0);
-  std::vector<std::pair<std::size_t, std::size_t>> clusters;
+  std::vector<std::pair<std::size_t, std::size_t>> ranges;  // of `order`
   std::vector<std::pair<std::size_t, std::size_t>> todo{{0, order.size()}};
   while (!todo.empty()) {
     const auto [lo, hi] = todo.back();
     todo.pop_back();
     if (hi - lo <= cap) {
-      clusters.emplace_back(lo, hi);
+      ranges.emplace_back(lo, hi);
       continue;
     }
     Vec3 mn = x[order[lo]], mx = mn;
@@ -51,11 +50,11 @@ std::vector<std::pair<std::size_t, std::size_t>> bisect(const std::vector<Vec3>&
     todo.emplace_back(lo, mid);
     todo.emplace_back(mid, hi);
   }
-  std::sort(clusters.begin(), clusters.end());  // a fixed order, independent of the work list
+  std::sort(ranges.begin(), ranges.end());  // a fixed order, independent of the work list
+  std::vector<std::vector<std::size_t>> clusters;
+  for (const auto& [lo, hi] : ranges) clusters.emplace_back(order.begin() + long(lo), order.begin() + long(hi));
   return clusters;
 }
-
-}  // namespace
 
 AcceleratedStokesianDynamics::AcceleratedStokesianDynamics(std::unique_ptr<MobilityOperator> far_field, double mu,
                                                            lubrication::NearFieldParams p, double krylov_tolerance,
@@ -184,8 +183,7 @@ void AcceleratedStokesianDynamics::factorise_held(const std::vector<long>& v) {
     // Centres of the held particles (an open domain: as they are).
     std::vector<Vec3> x(held.size());
     for (std::size_t k = 0; k < held.size(); ++k) x[k] = config_.x[std::size_t(held[k])];
-    std::vector<std::size_t> order;
-    const auto clusters = bisect(x, std::size_t(kHeldCluster), order);
+    const auto clusters = bisect_clusters(x, std::size_t(kHeldCluster));
     ewald::EwaldReferenceOptions ewald_options;
     ewald_options.tail = kHeldEwaldTail;
     held_entries_.resize(clusters.size());
@@ -194,9 +192,9 @@ void AcceleratedStokesianDynamics::factorise_held(const std::vector<long>& v) {
       std::vector<Vec3> xc;
       std::vector<double> ac;
       std::vector<long>& entries = held_entries_[c];
-      for (std::size_t k = clusters[c].first; k < clusters[c].second; ++k) {
-        const long i = held[order[k]];
-        xc.push_back(x[order[k]]);
+      for (std::size_t k : clusters[c]) {
+        const long i = held[k];
+        xc.push_back(x[k]);
         ac.push_back(config_.a[std::size_t(i)]);
         for (int q = 0; q < d; ++q) entries.push_back(i * d + q);
       }
@@ -209,16 +207,15 @@ void AcceleratedStokesianDynamics::factorise_held(const std::vector<long>& v) {
     // columns (3 + 3 per direction of extent, at most 12 per cluster) fit kHeldCoarseColumns.
     if (held_coarse_ && clusters.size() > 1) {
       std::size_t cap = std::size_t(kHeldCluster);
-      std::vector<std::size_t> corder;
-      auto coarse = bisect(x, cap, corder);
-      while (12 * long(coarse.size()) > kHeldCoarseColumns) coarse = bisect(x, cap *= 2, corder);
-      for (const auto& [lo, hi] : coarse) {
+      auto coarse = bisect_clusters(x, cap);
+      while (12 * long(coarse.size()) > kHeldCoarseColumns) coarse = bisect_clusters(x, cap *= 2);
+      for (const auto& cluster : coarse) {
         Vec3 centre = Vec3::Zero();
-        for (std::size_t k = lo; k < hi; ++k) centre += x[corder[k]];
-        centre /= double(hi - lo);
+        for (std::size_t k : cluster) centre += x[k];
+        centre /= double(cluster.size());
         Mat3 cov = Mat3::Zero();
-        for (std::size_t k = lo; k < hi; ++k) cov += (x[corder[k]] - centre) * (x[corder[k]] - centre).transpose();
-        cov /= double(hi - lo);
+        for (std::size_t k : cluster) cov += (x[k] - centre) * (x[k] - centre).transpose();
+        cov /= double(cluster.size());
         // Linear directions: the principal axes with a spread (a sheet of wall particles has two),
         // scaled to unit variance; each member keeps its coordinates along them.
         Eigen::SelfAdjointEigenSolver<Mat3> es(cov);
@@ -229,7 +226,7 @@ void AcceleratedStokesianDynamics::factorise_held(const std::vector<long>& v) {
           if (top > 0.0 && es.eigenvalues()[q] > 1e-4 * top)
             dirs.col(m++) = es.eigenvectors().col(q) / std::sqrt(es.eigenvalues()[q]);
         std::vector<std::pair<long, Vec3>> members;
-        for (std::size_t k = lo; k < hi; ++k) members.emplace_back(held[corder[k]], dirs.transpose() * (x[corder[k]] - centre));
+        for (std::size_t k : cluster) members.emplace_back(held[k], dirs.transpose() * (x[k] - centre));
         coarse_offset_.push_back(coarse_size_);
         coarse_dims_.push_back(m);
         coarse_size_ += 3 + 3 * m;

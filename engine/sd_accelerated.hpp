@@ -128,6 +128,10 @@ struct AcceleratedSdStats {
   } totals;
 };
 
+// Clusters of at most `cap` points (indices into x) by recursive bisection at the median along the
+// longest extent, in a fixed order: the held-row preconditioner's blocks and coarse clusters.
+std::vector<std::vector<std::size_t>> bisect_clusters(const std::vector<Vec3>& x, std::size_t cap);
+
 class AcceleratedStokesianDynamics final : public HydroSolver {
  public:
   enum class Method { gmres, bicgstab };

@@ -423,6 +423,25 @@ TEST_CASE("accelerated SD: the held-row preconditioner and the plain solve agree
   }
 }
 
+// A fast path of the held-row preconditioner against its twin on one problem: the two solvers as
+// accelerated() makes them, each adjusted by its setter, prepared and solved once.
+struct TwinSolves {
+  double difference;  // worst relative difference of the solutions (compare().worst())
+  AcceleratedSdStats fast, twin;
+};
+TwinSolves solve_twins(const Case& c, const Loaded& l, Moments m, double tol,
+                       const std::function<void(AcceleratedStokesianDynamics&)>& set_fast,
+                       const std::function<void(AcceleratedStokesianDynamics&)>& set_twin) {
+  const HydroProblem problem{l.conf, c.fixed, l.sample, l.F, l.T};
+  auto fast = accelerated(c, m, 1.0, tol), twin = accelerated(c, m, 1.0, tol);
+  set_fast(*fast);
+  set_twin(*twin);
+  fast->prepare(l.conf);
+  twin->prepare(l.conf);
+  const HydroResult rf = fast->solve(problem), rt = twin->solve(problem);
+  return {compare(rf, rt, m, c.fixed).worst(), fast->stats(), twin->stats()};
+}
+
 TEST_CASE("accelerated SD: the long-wave part of the held-row preconditioner agrees with block-Jacobi alone and "
           "cuts the iterations") {
   // Fast path: P^-1 = G B G (G the long-wave deflation of the held particles, engine/brownian.hpp);
@@ -431,29 +450,24 @@ TEST_CASE("accelerated SD: the long-wave part of the held-row preconditioner agr
   // of each other (each within tol of the exact answer), and the first pass (to the GMRES tolerance)
   // at least a sixth shorter with the long-wave part (measured: FT 1e-3 about a third). Against dense
   // SD: "accelerated SD with held particles", periodic case.
-  const double mu = 1.0;
   const AmbientFlow flow = simple_shear(1.0);
   const Case c = holding_all_but_every(make_case("sheared phi 0.2, 90 % held", 300, 0.2, true, 0.23, 0.0, 0, false, 205), 10);
   const Loaded l = loaded(c, flow, 13);
-  const HydroProblem problem{l.conf, c.fixed, l.sample, l.F, l.T};
   for (Moments m : {Moments::F, Moments::FT, Moments::FTS})
     for (double tol : {1e-3, 1e-6}) {
       if (test::kSanitized && (m == Moments::FTS || tol < 1e-3)) continue;
-      auto fast = accelerated(c, m, mu, tol), twin = accelerated(c, m, mu, tol);
-      twin->set_held_long_wave(false);
-      fast->prepare(l.conf);
-      twin->prepare(l.conf);
-      const HydroResult rf = fast->solve(problem), rt = twin->solve(problem);
-      const double e = compare(rf, rt, m, c.fixed).worst();
-      const int it_fast = fast->stats().first_pass_iterations, it_twin = twin->stats().first_pass_iterations;
+      const TwinSolves t = solve_twins(c, l, m, tol, [](AcceleratedStokesianDynamics&) {},
+                                       [](AcceleratedStokesianDynamics& s) { s.set_held_long_wave(false); });
+      const double e = t.difference;
+      const int it_fast = t.fast.first_pass_iterations, it_twin = t.twin.first_pass_iterations;
       MESSAGE(std::string(to_string(m)) << " tol " << tol << ": difference " << e / tol << " tol, first pass "
-                                        << it_fast << " against " << it_twin << ", all passes "
-                                        << fast->stats().iterations << " against " << twin->stats().iterations
-                                        << ", wave vectors " << fast->stats().held_wave_vectors);
+                                        << it_fast << " against " << it_twin << ", all passes " << t.fast.iterations
+                                        << " against " << t.twin.iterations << ", wave vectors "
+                                        << t.fast.held_wave_vectors);
       CAPTURE(to_string(m));
       CAPTURE(tol);
-      CHECK(fast->stats().held_wave_vectors > 0);
-      CHECK(twin->stats().held_wave_vectors == 0);
+      CHECK(t.fast.held_wave_vectors > 0);
+      CHECK(t.twin.held_wave_vectors == 0);
       CHECK(e <= 2 * tol);
       CHECK(it_fast <= 5 * it_twin / 6);
     }
@@ -479,25 +493,21 @@ TEST_CASE("accelerated SD: the coarse part of the held-row preconditioner agrees
     for (Moments m : {Moments::F, Moments::FT, Moments::FTS})
       for (double tol : {1e-3, 1e-6}) {
         if (test::kSanitized && (m == Moments::FTS || tol < 1e-3)) continue;
-        auto fast = accelerated(c, m, mu, tol), twin = accelerated(c, m, mu, tol);
-        fast->set_held_coarse(true, true);
-        twin->set_held_coarse(false);
-        fast->prepare(l.conf);
-        twin->prepare(l.conf);
-        const HydroResult rf = fast->solve(problem), rt = twin->solve(problem);
-        const double e = compare(rf, rt, m, c.fixed).worst();
-        const int it_fast = fast->stats().first_pass_iterations, it_twin = twin->stats().first_pass_iterations;
+        const TwinSolves t = solve_twins(c, l, m, tol, [](AcceleratedStokesianDynamics& s) { s.set_held_coarse(true, true); },
+                                         [](AcceleratedStokesianDynamics& s) { s.set_held_coarse(false); });
+        const double e = t.difference;
+        const int it_fast = t.fast.first_pass_iterations, it_twin = t.twin.first_pass_iterations;
         MESSAGE(c.name << " " << std::string(to_string(m)) << " tol " << tol << ": difference " << e / tol
                        << " tol, first pass " << it_fast << " against " << it_twin << ", all passes "
-                       << fast->stats().iterations << " against " << twin->stats().iterations << ", coarse columns "
-                       << fast->stats().held_coarse_columns << " (" << fast->stats().held_clusters << " blocks)");
+                       << t.fast.iterations << " against " << t.twin.iterations << ", coarse columns "
+                       << t.fast.held_coarse_columns << " (" << t.fast.held_clusters << " blocks)");
         CAPTURE(c.name);
         CAPTURE(to_string(m));
         CAPTURE(tol);
-        CHECK(fast->stats().held_coarse_columns > 0);
-        CHECK(twin->stats().held_coarse_columns == 0);
+        CHECK(t.fast.held_coarse_columns > 0);
+        CHECK(t.twin.held_coarse_columns == 0);
         CHECK(e <= 2 * tol);
-        CHECK(fast->stats().iterations <= 9 * twin->stats().iterations / 10);
+        CHECK(t.fast.iterations <= 9 * t.twin.iterations / 10);
         CHECK(it_fast <= it_twin);
       }
     // Default: at the first solve in a box at zero strain (open here); in a sheared box once a third
