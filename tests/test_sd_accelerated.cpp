@@ -167,6 +167,13 @@ Case holding_all_but_every(Case c, long k) {
   return c;
 }
 
+// A random suspension at phi = 0.2 with 90 % held (every particle but each tenth): open, or periodic
+// at the given Lees-Edwards strain ("sheared" when it is not zero).
+Case ninety_percent_held(long n, bool periodic, double strain, int close, std::uint64_t seed) {
+  const std::string box = !periodic ? "open" : strain != 0.0 ? "sheared" : "periodic";
+  return holding_all_but_every(make_case(box + " phi 0.2, 90 % held", n, 0.2, periodic, strain, 0.0, close, false, seed), 10);
+}
+
 // A case's problem: its configuration, the ambient flow at its centres, random unit loads.
 struct Loaded {
   Configuration conf;
@@ -363,9 +370,9 @@ TEST_CASE("accelerated SD: the held-row preconditioner and the plain solve agree
   const AmbientFlow flow = simple_shear(1.0);
   std::vector<Case> cases;
   cases.push_back(make_case("open phi 0.3, 20 % held", 60, 0.3, false, 0.0, 0.0, 4, true, 201));
-  cases.push_back(holding_all_but_every(make_case("open phi 0.2, 90 % held", 60, 0.2, false, 0.0, 0.0, 3, false, 202), 10));
+  cases.push_back(ninety_percent_held(60, false, 0.0, 3, 202));
   cases.push_back(make_case("sheared phi 0.3, 20 % held", 60, 0.3, true, 0.23, 0.0, 3, true, 203));
-  cases.push_back(holding_all_but_every(make_case("sheared phi 0.2, 90 % held", 60, 0.2, true, 0.23, 0.0, 3, false, 204), 10));
+  cases.push_back(ninety_percent_held(60, true, 0.23, 3, 204));
   cases.push_back(wall_case(false));
   cases.push_back(wall_case(true));
   for (const Case& c : cases) {
@@ -451,7 +458,7 @@ TEST_CASE("accelerated SD: the long-wave part of the held-row preconditioner agr
   // at least a sixth shorter with the long-wave part (measured: FT 1e-3 about a third). Against dense
   // SD: "accelerated SD with held particles", periodic case.
   const AmbientFlow flow = simple_shear(1.0);
-  const Case c = holding_all_but_every(make_case("sheared phi 0.2, 90 % held", 300, 0.2, true, 0.23, 0.0, 0, false, 205), 10);
+  const Case c = ninety_percent_held(300, true, 0.23, 0, 205);
   const Loaded l = loaded(c, flow, 13);
   for (Moments m : {Moments::F, Moments::FT, Moments::FTS})
     for (double tol : {1e-3, 1e-6}) {
@@ -484,10 +491,7 @@ TEST_CASE("accelerated SD: the coarse part of the held-row preconditioner agrees
   const double mu = 1.0;
   const AmbientFlow flow = simple_shear(1.0);
   for (bool periodic : {false, true}) {
-    const Case c = holding_all_but_every(
-        make_case(periodic ? "sheared phi 0.2, 90 % held" : "open phi 0.2, 90 % held", 300, 0.2, periodic,
-                  periodic ? 0.23 : 0.0, 0.0, 0, false, 205),
-        10);
+    const Case c = ninety_percent_held(300, periodic, periodic ? 0.23 : 0.0, 0, 205);
     const Loaded l = loaded(c, flow, 13);
     const HydroProblem problem{l.conf, c.fixed, l.sample, l.F, l.T};
     for (Moments m : {Moments::F, Moments::FT, Moments::FTS})
@@ -548,10 +552,7 @@ TEST_CASE("accelerated SD: the held-row preconditioner depends on the held parti
   const double mu = 1.0;
   const AmbientFlow flow = simple_shear(0.0);
   for (bool periodic : {false, true}) {
-    const Case c1 = holding_all_but_every(
-        make_case(periodic ? "periodic phi 0.2, 90 % held" : "open phi 0.2, 90 % held", 300, 0.2, periodic, 0.0, 0.0, 0,
-                  false, 307),
-        10);
+    const Case c1 = ninety_percent_held(300, periodic, 0.0, 0, 307);
     Case c2 = c1;
     Rng rng(11, 0);
     for (std::size_t i = 0; i < c2.x.size(); ++i)
